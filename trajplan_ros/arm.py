@@ -1,0 +1,203 @@
+"""Serial revolute arm described by Denavit-Hartenberg parameters (Lv et al. 2019, eq. 1-2).
+
+Each joint i has standard DH parameters (a_i, alpha_i, d_i) and its DH angle is
+``theta_i = sign_i * q_i + offset_i``, where q is the joint angle a user commands. The paper's
+arm needs this mapping (see ``paper_arm``): its q = 0 is the upright pose. Units are SI
+(metres, radians), REP 103.
+
+Forward kinematics is vectorised over an (N, n_joints) array of configurations.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["ArmModel", "InvalidArmModel", "paper_arm"]
+
+
+class InvalidArmModel(ValueError):
+    """The arm description is not a usable chain (reason in the message)."""
+
+
+def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (n,):
+        raise InvalidArmModel(f"{name} needs {n} values, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidArmModel(f"{name} has a non-finite value: {arr.tolist()}")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class ArmModel:
+    """A chain of revolute joints; the first ``planned`` joints are optimised, the rest held.
+
+    Attributes (all arrays have one entry per joint):
+        a, alpha, d: DH link length (m), twist (rad) and offset (m), transform
+            T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) (eq. 1).
+        sign, offset: theta_i = sign_i * q_i + offset_i (sign is +1 or -1).
+        lower, upper: joint limits on q (rad).
+        joint_names: names used in JointState / JointTrajectory messages.
+        planned: how many leading joints the planner moves (2..7); the others keep their start angle.
+    """
+
+    a: np.ndarray
+    alpha: np.ndarray
+    d: np.ndarray
+    sign: np.ndarray
+    offset: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    joint_names: tuple[str, ...]
+    planned: int
+    _cos_alpha: np.ndarray = field(init=False, repr=False, compare=False)
+    _sin_alpha: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __init__(self, a: Sequence[float], alpha: Sequence[float], d: Sequence[float], *,
+                 sign: Sequence[float] | None = None, offset: Sequence[float] | None = None,
+                 lower: Sequence[float], upper: Sequence[float],
+                 joint_names: Sequence[str] | None = None, planned: int | None = None) -> None:
+        n = len(a)
+        if n == 0:
+            raise InvalidArmModel("the arm has no joints")
+        put = object.__setattr__
+        put(self, "a", _vector("a", a, n))
+        put(self, "alpha", _vector("alpha", alpha, n))
+        put(self, "d", _vector("d", d, n))
+        put(self, "sign", _vector("sign", np.ones(n) if sign is None else sign, n))
+        put(self, "offset", _vector("offset", np.zeros(n) if offset is None else offset, n))
+        put(self, "lower", _vector("lower", lower, n))
+        put(self, "upper", _vector("upper", upper, n))
+        if not np.all(np.abs(self.sign) == 1.0):
+            raise InvalidArmModel(f"sign must be +1 or -1 per joint, got {self.sign.tolist()}")
+        bad = np.flatnonzero(self.lower > self.upper)
+        if bad.size:
+            i = int(bad[0])
+            raise InvalidArmModel(
+                f"joint {i + 1}: lower limit {self.lower[i]} is above upper limit {self.upper[i]}")
+        names = tuple(joint_names) if joint_names is not None else tuple(
+            f"joint{i + 1}" for i in range(n))
+        if len(names) != n or len(set(names)) != n or not all(isinstance(s, str) and s for s in names):
+            raise InvalidArmModel(f"joint_names must be {n} distinct non-empty names, got {list(names)}")
+        put(self, "joint_names", names)
+        planned = n if planned is None else int(planned)
+        if not 2 <= planned <= min(n, 7):
+            raise InvalidArmModel(f"planned joints must be between 2 and {min(n, 7)}, got {planned}")
+        put(self, "planned", planned)
+        put(self, "_cos_alpha", np.cos(self.alpha))
+        put(self, "_sin_alpha", np.sin(self.alpha))
+
+    @property
+    def n_joints(self) -> int:
+        return self.a.size
+
+    @property
+    def reach(self) -> float:
+        """Radius of a sphere about the base origin that contains every tool position (eq. 14).
+
+        Each link moves the tool point by at most sqrt(a_i^2 + d_i^2), so no goal farther than
+        the sum can be reached, whatever the joint angles.
+        """
+        return float(np.sum(np.hypot(self.a, self.d)))
+
+    def within_limits(self, q: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+        """True where every joint of q (..., n_joints) lies inside its limits."""
+        q = np.asarray(q, dtype=float)
+        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
+
+    def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints)."""
+        x, y, z = self._chain(np.asarray(q, dtype=float), jacobian=False)
+        return np.stack((x[0], y[0], z[0]), axis=1), np.stack((x[1], y[1], z[1]), axis=1)
+
+    def tool_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Tool position p, axis u (N, 3) and their derivatives Jp, Ju (N, 3, planned).
+
+        For revolute joint i, dp/dq_i = sign_i z_{i-1} x (p - o_{i-1}) and du/dq_i = sign_i z_{i-1} x u.
+        """
+        x, y, z = self._chain(np.asarray(q, dtype=float), jacobian=True)
+        vec = np.stack((x, y, z), axis=-1)                    # (2 + 2 planned, N, 3)
+        jac = np.moveaxis(vec[2:].reshape(self.planned, 2, -1, 3), 0, -1)   # (2, N, 3, planned)
+        return vec[0], vec[1], jac[0], jac[1]
+
+    def _chain(self, q: np.ndarray, jacobian: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Walk the chain from the tool to the base (the hot path of every optimiser).
+
+        Rows of the returned x, y, z arrays (each (rows, N)) are the tool point, the tool axis
+        and, with ``jacobian``, d(point)/dq_i and d(axis)/dq_i for each planned joint. Per joint
+        it applies v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the
+        translation only to the point), so the cost is a few array operations per joint
+        whatever N is. The derivative rows for joint i are born in frame i-1 as z x v and then
+        rotated with everything else.
+        """
+        theta = q * self.sign + self.offset
+        cos_t, sin_t = np.cos(theta).T, np.sin(theta).T
+        rows = 2 + 2 * self.planned if jacobian else 2
+        x = np.zeros((rows, q.shape[0]))
+        y = np.zeros_like(x)
+        z = np.zeros_like(x)
+        z[1] = 1.0
+        for i in range(self.n_joints - 1, -1, -1):
+            ca, sa = self._cos_alpha[i], self._sin_alpha[i]
+            if sa != 0.0 or ca != 1.0:
+                y, z = ca * y - sa * z, sa * y + ca * z
+            x[0] += self.a[i]
+            z[0] += self.d[i]
+            c, s = cos_t[i], sin_t[i]
+            x, y = c * x - s * y, s * x + c * y
+            if jacobian and i < self.planned:
+                r = 2 + 2 * i
+                x[r:r + 2] = -self.sign[i] * y[:2]
+                y[r:r + 2] = self.sign[i] * x[:2]
+        return x, y, z
+
+    def frames(self, q: np.ndarray) -> np.ndarray:
+        """Homogeneous transforms of every frame, shape (N, n_joints + 1, 4, 4); index 0 is the base."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        theta = q * self.sign + self.offset
+        ct, st = np.cos(theta), np.sin(theta)
+        n = q.shape[0]
+        link = np.zeros((n, self.n_joints, 4, 4))
+        ca, sa = self._cos_alpha, self._sin_alpha
+        link[..., 0, 0] = ct
+        link[..., 0, 1] = -st * ca
+        link[..., 0, 2] = st * sa
+        link[..., 0, 3] = self.a * ct
+        link[..., 1, 0] = st
+        link[..., 1, 1] = ct * ca
+        link[..., 1, 2] = -ct * sa
+        link[..., 1, 3] = self.a * st
+        link[..., 2, 1] = sa
+        link[..., 2, 2] = ca
+        link[..., 2, 3] = self.d
+        link[..., 3, 3] = 1.0
+        out = np.empty((n, self.n_joints + 1, 4, 4))
+        out[:, 0] = np.eye(4)
+        for i in range(self.n_joints):
+            out[:, i + 1] = out[:, i] @ link[:, i]
+        return out
+
+
+def paper_arm() -> ArmModel:
+    """The arm of Lv et al. 2019 in SI units (Table 3 in metres, Table 4 limits).
+
+    DH (a, alpha, d): (0.010, -90deg, 0), (0.104, 0, 0), (0.096, 0, 0), (0.027, +90deg, 0),
+    (0, 0, 0.137). With theta = sign * q + offset, sign = (1, 1, 1, -1, 1) and
+    offset = (0, -90deg, 0, +90deg, 0) (NOTES.md), q = 0 is the upright pose with the tool at
+    (0.037, 0, 0.337) m and Table 5's IEPSO answer lands on the paper's target. Joints 1-4 are
+    planned; joint 5 spins the tool about its own axis and is held.
+    """
+    deg = np.pi / 180.0
+    return ArmModel(
+        a=[0.010, 0.104, 0.096, 0.027, 0.0],
+        alpha=[-90 * deg, 0.0, 0.0, 90 * deg, 0.0],
+        d=[0.0, 0.0, 0.0, 0.0, 0.137],
+        sign=[1, 1, 1, -1, 1],
+        offset=[0.0, -90 * deg, 0.0, 90 * deg, 0.0],
+        lower=np.array([-135, -90, -135, -135, -180]) * deg,
+        upper=np.array([135, 90, 135, 90, 180]) * deg,
+        joint_names=[f"joint{i}" for i in range(1, 6)],
+        planned=4,
+    )

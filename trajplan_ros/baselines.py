@@ -1,0 +1,147 @@
+"""The comparison algorithms of section VI.B: PSO, SPSO, GA and DE on the same objective.
+
+Each takes the objective, a population size, an iteration cap and a seed, vectorised over the
+population, and stops by the same rule as IEPSO without polish (``optimize.History``), so with
+the defaults every algorithm has the same budget of population x max_iter evaluations.
+The paper does not give their settings; ours are the textbook ones:
+
+* PSO: inertia 0.9 -> 0.4, C1 = C2 = 2, global best (IEPSO without phi3 and elimination).
+* SPSO: the "standard PSO" of Bratton and Kennedy (2007): constriction w = 0.7298,
+  C1 = C2 = 1.49618, ring topology (each particle sees itself and its two neighbours).
+* GA: real-coded, binary tournament selection, blend crossover (BLX-0.5) with rate 0.9,
+  Gaussian mutation (10 % of the joint range) with rate 1/dim, one elite.
+* DE: DE/rand/1/bin, F = 0.5, CR = 0.9.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .objective import Objective
+from .optimize import History, OptimizeResult, initial_population
+
+__all__ = ["pso", "spso", "ga", "de"]
+
+_PATIENCE = 50
+
+
+class _Run:
+    """State shared by the population methods: evaluation, elitist best, history, stopping."""
+
+    def __init__(self, obj: Objective, population: int, max_iter: int, tol: float,
+                 seed: int | np.random.Generator | None) -> None:
+        if population < 4 or max_iter < 1:
+            raise ValueError("population must be >= 4 and max_iter >= 1")
+        self.obj, self.rng = obj, np.random.default_rng(seed)
+        self.lo, self.hi = obj.lower, obj.upper
+        self.history = History(max_iter, tol, _PATIENCE, obj.shaping.eps)
+        self.max_iter, self.nfev = max_iter, 0
+        self.best_x, self.best_f, self.best_err = None, np.inf, np.inf
+
+    def evaluate(self, x: np.ndarray) -> np.ndarray:
+        ev = self.obj(x)
+        self.nfev += x.shape[0]
+        i = int(np.argmin(ev.efficiency))
+        if ev.efficiency[i] < self.best_f:
+            self.best_x, self.best_f, self.best_err = x[i].copy(), ev.efficiency[i], ev.error[i]
+        return ev.efficiency
+
+    def step_done(self) -> bool:
+        self.history.record(float(self.best_f), float(self.best_err))
+        return self.history.stalled()
+
+    def result(self, converged: bool) -> OptimizeResult:
+        return self.history.result(self.obj, self.best_x, self.nfev, converged)
+
+
+def _swarm(obj: Objective, population: int, max_iter: int, tol: float, seed, *, constricted: bool) -> OptimizeResult:
+    run = _Run(obj, population, max_iter, tol, seed)
+    lo, hi = run.lo, run.hi
+    vmax = 0.2 * (hi - lo)
+    x = initial_population(run.rng, lo, hi, (population,))
+    v = (2 * run.rng.random(x.shape) - 1) * vmax
+    f = run.evaluate(x)
+    pbest, pbest_f = x.copy(), f.copy()
+    ring = np.stack((np.roll(np.arange(population), 1), np.arange(population),
+                     np.roll(np.arange(population), -1)), axis=1)
+    for it in range(max_iter):
+        r1, r2 = run.rng.random((2,) + x.shape)
+        if constricted:
+            w, c1, c2 = 0.7298, 1.49618, 1.49618
+            leader = pbest[ring[np.arange(population), np.argmin(pbest_f[ring], axis=1)]]
+        else:
+            w, c1, c2 = 0.9 - 0.5 * it / max(max_iter - 1, 1), 2.0, 2.0
+            leader = pbest[np.argmin(pbest_f)][None, :]
+        v = np.clip(w * v + c1 * r1 * (pbest - x) + c2 * r2 * (leader - x), -vmax, vmax)
+        x = x + v
+        outside = (x < lo) | (x > hi)
+        x = np.clip(x, lo, hi)
+        v[outside] = 0.0
+        f = run.evaluate(x)
+        better = f < pbest_f
+        pbest[better], pbest_f[better] = x[better], f[better]
+        if run.step_done():
+            return run.result(True)
+    return run.result(False)
+
+
+def pso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+        seed: int | np.random.Generator | None = None) -> OptimizeResult:
+    """Standard inertia-weight PSO with a global best."""
+    return _swarm(obj, population, max_iter, tol, seed, constricted=False)
+
+
+def spso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+         seed: int | np.random.Generator | None = None) -> OptimizeResult:
+    """Standard PSO 2007: constriction coefficients and a ring topology."""
+    return _swarm(obj, population, max_iter, tol, seed, constricted=True)
+
+
+def ga(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+       seed: int | np.random.Generator | None = None) -> OptimizeResult:
+    """Real-coded genetic algorithm with tournament selection, BLX-0.5 and Gaussian mutation."""
+    run = _Run(obj, population, max_iter, tol, seed)
+    lo, hi, rng = run.lo, run.hi, run.rng
+    dim = lo.size
+    x = initial_population(rng, lo, hi, (population,))
+    f = run.evaluate(x)
+    for _ in range(max_iter):
+        pairs = rng.integers(0, population, (2, population))
+        parents = x[np.where(f[pairs[0]] < f[pairs[1]], pairs[0], pairs[1])]
+        mates = parents[rng.permutation(population)]
+        gap = np.abs(parents - mates)
+        low = np.minimum(parents, mates) - 0.5 * gap
+        child = low + rng.random(x.shape) * 2.0 * gap
+        child = np.where(rng.random((population, 1)) < 0.9, child, parents)
+        mutate = rng.random(x.shape) < 1.0 / dim
+        child = child + mutate * rng.normal(0.0, 0.1, x.shape) * (hi - lo)
+        x = np.clip(child, lo, hi)
+        x[0] = run.best_x                                   # elitism
+        f = run.evaluate(x)
+        if run.step_done():
+            return run.result(True)
+    return run.result(False)
+
+
+def de(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+       seed: int | np.random.Generator | None = None) -> OptimizeResult:
+    """Differential evolution, DE/rand/1/bin with F = 0.5 and CR = 0.9."""
+    run = _Run(obj, population, max_iter, tol, seed)
+    lo, hi, rng = run.lo, run.hi, run.rng
+    dim = lo.size
+    x = initial_population(rng, lo, hi, (population,))
+    f = run.evaluate(x)
+    idx = np.arange(population)
+    for _ in range(max_iter):
+        # three distinct partners per member, none equal to the member itself
+        r = np.argsort(rng.random((population, population - 1)), axis=1)[:, :3]
+        r = r + (r >= idx[:, None])
+        mutant = x[r[:, 0]] + 0.5 * (x[r[:, 1]] - x[r[:, 2]])
+        cross = rng.random(x.shape) < 0.9
+        cross[idx, rng.integers(0, dim, population)] = True
+        trial = np.clip(np.where(cross, mutant, x), lo, hi)
+        ft = run.evaluate(trial)
+        keep = ft < f
+        x[keep], f[keep] = trial[keep], ft[keep]
+        if run.step_done():
+            return run.result(True)
+    return run.result(False)

@@ -1,0 +1,158 @@
+"""Fuzzy rewards and punishment (Lv et al. 2019, section IV and VI.A), in SI units.
+
+The paper works in millimetres; here every length is in metres, so its thresholds become
+eps = 0.005 mm = 5e-6 m and s = 0.5e-6 mm = 5e-10 m. k = 10000 and j = 3 are dimensionless
+gains on a term measured in seconds, exactly as in Table 4, so F values match Table 5.
+
+Where the paper is silent or ill-posed, these are our choices (also listed in the README):
+
+* err_max (eq. 15) is not defined in the paper. We take twice the arm's reach, the largest
+  distance between a tool position and a goal inside the reach sphere.
+* Eq. (15) is linear in err on the punishment side. With err_max reach-sized, lambda and so the
+  punishment alpha (eq. 16) barely change between 2 mm and eps, and a swarm stalls millimetres
+  from the goal (NOTES.md). By default lambda is therefore log-scaled on that side,
+  lambda = -ln(err/eps) / ln(err_max/eps): the same end points (0 at eps, -1 at err_max) and the
+  same monotonic meaning, but alpha keeps a slope at every scale. ``lambda_scale="linear"`` is
+  the literal eq. (15).
+* Eq. (17) switches between its two reward pieces at lambda = 0.99, but the pieces only join
+  at err = s (lambda = 1 - s/eps); Table 4's ranges (beta1 from 0 to -12, beta2 from -12 to -24)
+  say the same. We switch at err = s, so the reward is continuous.
+* Table 1's second input (High / Middle / Low) is not named in the paper. We read it as the
+  particle's motion time relative to the longest possible one, tau = R / R_max, so that, as the
+  table says, slow particles far from the goal are punished harder than fast ones.
+* How the rule base's output acts is not stated either. The Table 1 rules are evaluated with
+  Gaussian membership functions (Table 2), min for "and" (eq. 6) and a weighted mean of output
+  singletons on [-1, 1]; the resulting degree lambda_R is averaged with lambda before eq. (16):
+  lambda_eff = (lambda + lambda_R) / 2. Averaging keeps alpha strictly monotonic in the error
+  (the table has flat runs such as VSP VSP VSP) while the table decides how hard to punish.
+  The reward side uses eq. (17) unchanged, which keeps the paper's efficiency scalars
+  (Table 5: F = R - 24 at zero error).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["RewardPunishment", "RULE_TABLE", "OUTPUT_LEVELS", "gaussian", "bell", "sigmoid",
+           "linear_membership"]
+
+#: Output levels of Table 1, as degrees of reward (+) or punishment (-) in [-1, 1].
+OUTPUT_LEVELS: dict[str, float] = {
+    "VSP": -1.0, "VVP": -0.75, "RSP": -0.5, "RLP": -0.25,
+    "NRP": 0.0, "RLR": 0.25, "RSR": 0.5, "VSR": 1.0,
+}
+#: Table 1: rows are the second input (H, M, L), columns the closeness of the error
+#: (VF, SF, LF, LC, BE, ZC, SC, VC). The paper prints "NPR" for NRP.
+RULE_TABLE: dict[str, tuple[str, ...]] = {
+    "H": ("VSP", "VSP", "VSP", "RSP", "NRP", "RLR", "RLR", "RSR"),
+    "M": ("VSP", "VVP", "VVP", "RSP", "NRP", "RLR", "RLR", "RSR"),
+    "L": ("VSP", "VVP", "RSP", "RSP", "NRP", "RLR", "RSR", "VSR"),
+}
+#: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the L, M, H sets on tau.
+_CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0])
+_TIME_CENTRES = {"L": 0.0, "M": 0.5, "H": 1.0}
+_SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]] for row in ("H", "M", "L")])
+_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ("H", "M", "L")])
+
+
+def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
+    """Table 2, Gauss: exp(-(x - c)^2 / sigma^2)."""
+    return np.exp(-((x - c) ** 2) / sigma ** 2)
+
+
+def bell(x: np.ndarray, a: float, b: float, c: float) -> np.ndarray:
+    """Table 2, Bell: 1 / (1 + |(x - c) / a|^(2 b))."""
+    return 1.0 / (1.0 + np.abs((x - c) / a) ** (2 * b))
+
+
+def sigmoid(x: np.ndarray, a: float, c: float) -> np.ndarray:
+    """Table 2, Sigmoid: 1 / (1 + exp(-a (x - c)))."""
+    return 1.0 / (1.0 + np.exp(-a * (x - c)))
+
+
+def linear_membership(x: np.ndarray, a: float, b: float) -> np.ndarray:
+    """Table 2, linear: (x - a) / (b - a), clipped to [0, 1]."""
+    return np.clip((x - a) / (b - a), 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class RewardPunishment:
+    """The S term of eq. (9) with Table 4's defaults in metres.
+
+    Attributes:
+        eps: reward and punishment waken threshold (m); errors above it are punished.
+        s: reward waken threshold (m) between the two reward pieces of eq. (17).
+        k, j: punishment and reward gains (eq. 16, 17).
+        err_max: error at which lambda reaches -1 (m); None means twice the arm's reach.
+        lambda_scale: "log" (default, see module docstring) or "linear" (literal eq. 15).
+        fuzzy_rules: apply the Table 1 rule base to the punishment.
+        reward: apply the reward (eq. 17); False gives the "no reward" curve of Fig. 10.
+        sigma: width of the Gaussian membership functions.
+    """
+
+    eps: float = 5e-6
+    s: float = 5e-10
+    k: float = 10000.0
+    j: float = 3.0
+    err_max: float | None = None
+    lambda_scale: str = "log"
+    fuzzy_rules: bool = True
+    reward: bool = True
+    sigma: float = 0.15
+
+    def __post_init__(self) -> None:
+        values = (self.eps, self.s, self.k, self.j, self.sigma)
+        if not all(np.isfinite(v) and v > 0 for v in values):
+            raise ValueError("eps, s, k, j and sigma must be finite and positive")
+        if not self.s < self.eps:
+            raise ValueError(f"s ({self.s}) must be below eps ({self.eps})")
+        if self.err_max is not None and not (np.isfinite(self.err_max) and self.err_max > self.eps):
+            raise ValueError(f"err_max must be finite and above eps, got {self.err_max}")
+        if self.lambda_scale not in ("log", "linear"):
+            raise ValueError(f"lambda_scale must be 'log' or 'linear', got {self.lambda_scale!r}")
+
+    def closeness(self, err: np.ndarray, err_max: float) -> np.ndarray:
+        """Eq. (15): the degree lambda in [-1, 1] to which the error approaches zero."""
+        err = np.asarray(err, dtype=float)
+        reward_side = 1.0 - err / self.eps
+        if self.lambda_scale == "linear":
+            punish_side = -(err - self.eps) / (err_max - self.eps)
+        else:
+            ratio = np.maximum(err, self.eps) / self.eps
+            punish_side = -np.log(ratio) / np.log(err_max / self.eps)
+        return np.clip(np.where(err <= self.eps, reward_side, punish_side), -1.0, 1.0)
+
+    def rule_degree(self, lam: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau."""
+        mu_col = gaussian(lam[..., None], _CLOSENESS_CENTRES, self.sigma)          # (..., 8)
+        mu_row = gaussian(tau[..., None], _ROW_CENTRES, 2 * self.sigma)            # (..., 3)
+        weight = np.minimum(mu_row[..., :, None], mu_col[..., None, :])            # (..., 3, 8)
+        total = weight.sum(axis=(-2, -1))
+        return np.einsum("...rc,rc->...", weight, _SINGLETONS) / total
+
+    def punishment(self, lam: np.ndarray) -> np.ndarray:
+        """Eq. (16): alpha = k exp(-5 (lambda + 1)^2)."""
+        return self.k * np.exp(-5.0 * (lam + 1.0) ** 2)
+
+    def reward_value(self, err: np.ndarray) -> np.ndarray:
+        """Eq. (17): beta1 from 0 (err = eps) to -12 (err = s), beta2 from -12 to -24 (err = 0)."""
+        err = np.asarray(err, dtype=float)
+        # The paper's 0.02 / (eps - s) is 4 eps / (eps - s) with eps = 0.005 mm; written in eps
+        # it holds in any unit: beta1 = -j (-4 err + 4 eps) / (eps - s).
+        beta1 = -self.j * 4.0 * (self.eps - err) / (self.eps - self.s)
+        beta2 = -self.j * ((-4.0 / self.s) * err + 8.0)
+        return np.where(err <= self.s, beta2, beta1)
+
+    def __call__(self, err: np.ndarray, tau: np.ndarray, err_max: float) -> np.ndarray:
+        """S(err) of eq. (9): punishment above eps, reward at or below it."""
+        err = np.asarray(err, dtype=float)
+        lam = self.closeness(err, err_max)
+        if self.fuzzy_rules:
+            lam_eff = 0.5 * (lam + self.rule_degree(lam, np.clip(tau, 0.0, 1.0)))
+        else:
+            lam_eff = lam
+        alpha = self.punishment(lam_eff)
+        if self.reward:
+            return np.where(err > self.eps, alpha, self.reward_value(err))
+        return np.where(err > self.eps, alpha, 0.0)

@@ -1,0 +1,137 @@
+"""The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and start.
+
+R (eq. 10) is the motion time when every servo turns at the same angular velocity omega:
+max_i |q_i - q_start_i| / omega over the planned joints. S is the fuzzy rewards-and-punishment
+term on the error (eq. 11, ``fuzzy.RewardPunishment``).
+
+Mode "free" constrains only the tool position. Mode "radial" adds the orientation constraint of
+eq. (12)-(13): the tool axis must make the angle eps = arccos(z . p / |z||p|) with the base z
+axis. For the paper's arm that is theta2 + theta3 + theta4 = +-eps (DH); written through the tool
+axis it holds for any chain. In radial mode the error fed to S combines both residuals,
+err = sqrt(|p - goal|^2 + (L (u_z - cos eps))^2), with L the arm's reach turning the
+dimensionless axis residual into metres.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from .arm import ArmModel
+from .fuzzy import RewardPunishment
+
+__all__ = ["Mode", "Objective", "Evaluation", "InvalidRequest"]
+
+#: Table 4: angular velocity of every servo, rad/s.
+DEFAULT_OMEGA = 0.2
+
+
+class Mode(str, Enum):
+    """Which constraints a plan must meet."""
+
+    FREE = "free"
+    RADIAL = "radial"
+
+
+class InvalidRequest(ValueError):
+    """A goal or start that is refused before any optimisation (reason in the message)."""
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Vectorised objective values for N candidate joint goals."""
+
+    efficiency: np.ndarray      # F (eq. 9), s
+    motion_time: np.ndarray     # R (eq. 10), s
+    error: np.ndarray           # constraint error fed to S (eq. 11), m
+
+
+class Objective:
+    """F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary)."""
+
+    def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
+                 mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
+                 shaping: RewardPunishment | None = None) -> None:
+        self.arm = arm
+        self.mode = Mode(mode)
+        if not (np.isfinite(omega) and omega > 0):
+            raise ValueError(f"angular velocity must be finite and positive, got {omega}")
+        self.omega = float(omega)
+        self.shaping = shaping if shaping is not None else RewardPunishment()
+        self.goal = self._check_goal(arm, goal)
+        self.start = self._check_start(arm, start)
+        m = arm.planned
+        self.lower = arm.lower[:m].copy()
+        self.upper = arm.upper[:m].copy()
+        self.err_max = self.shaping.err_max or 2.0 * arm.reach
+        self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
+        self.axis_target = float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial else 0.0
+        self.n_constraints = 4 if self.radial else 3
+
+    @property
+    def radial(self) -> bool:
+        return self.mode is Mode.RADIAL
+
+    @staticmethod
+    def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:
+        g = np.asarray(goal, dtype=float)
+        if g.shape != (3,):
+            raise InvalidRequest(f"goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}")
+        if not np.all(np.isfinite(g)):
+            raise InvalidRequest(f"goal has a non-finite coordinate: {g.tolist()}")
+        dist = float(np.linalg.norm(g))
+        if dist > arm.reach:
+            raise InvalidRequest(
+                f"goal is {dist:.4f} m from the base, beyond the arm's reach of {arm.reach:.4f} m (eq. 14)")
+        return g
+
+    @staticmethod
+    def _check_start(arm: ArmModel, start: np.ndarray) -> np.ndarray:
+        q = np.asarray(start, dtype=float)
+        if q.shape != (arm.n_joints,):
+            raise InvalidRequest(f"start needs {arm.n_joints} joint angles, got shape {q.shape}")
+        if not np.all(np.isfinite(q)):
+            raise InvalidRequest(f"start has a non-finite joint angle: {q.tolist()}")
+        out = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))
+        if out.size:
+            i = int(out[0])
+            raise InvalidRequest(
+                f"start joint {arm.joint_names[i]} = {q[i]:.4f} rad is outside its limits "
+                f"[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]")
+        return np.clip(q, arm.lower, arm.upper)
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        """Joint vectors (N, n_joints): the planned joints from x (N, planned), the rest held."""
+        x = np.atleast_2d(x)
+        q = np.broadcast_to(self.start, (x.shape[0], self.arm.n_joints)).copy()
+        q[:, : self.arm.planned] = x
+        return q
+
+    def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Constraint residuals (N, 3) or (N, 4): p - goal, and u_z - cos eps in radial mode."""
+        r = p - self.goal
+        if self.radial:
+            r = np.concatenate((r, (u[:, 2:3] - self.axis_target)), axis=1)
+        return r
+
+    def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Eq. (11), extended by the axis residual in radial mode (see module docstring)."""
+        pos = p - self.goal
+        sq = np.einsum("ij,ij->i", pos, pos)
+        if self.radial:
+            sq = sq + (self.arm.reach * (u[:, 2] - self.axis_target)) ** 2
+        return np.sqrt(sq)
+
+    def motion_time(self, x: np.ndarray) -> np.ndarray:
+        """Eq. (10): R = max_i |x_i - start_i| / omega."""
+        return np.max(np.abs(x - self.start[: self.arm.planned]), axis=-1) / self.omega
+
+    def __call__(self, x: np.ndarray) -> Evaluation:
+        """Evaluate F for candidate planned-joint vectors x (N, planned)."""
+        x = np.atleast_2d(x)
+        p, u = self.arm.tool(self.full(x))
+        err = self.errors(p, u)
+        r = self.motion_time(x)
+        f = r + self.shaping(err, r / self.longest_time, self.err_max)
+        return Evaluation(f, r, err)

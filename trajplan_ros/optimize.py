@@ -1,0 +1,74 @@
+"""What every optimiser returns, and the bookkeeping they share (history, stopping rule)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .objective import Objective
+
+__all__ = ["OptimizeResult", "History", "initial_population"]
+
+
+@dataclass
+class OptimizeResult:
+    """Best joint goal found by an optimiser (planned joints only), scipy.optimize style.
+
+    Attributes:
+        x: best planned-joint vector (rad).
+        fun: its efficiency scalar F (eq. 9).
+        motion_time: its R (eq. 10), s.
+        error: its constraint error (eq. 11), m.
+        nit: iterations (generations) run.
+        nfev: objective evaluations used (polish steps not included).
+        converged: True when the stopping rule fired before the iteration cap.
+        history_fun, history_error: best F and its error after every iteration.
+    """
+
+    x: np.ndarray
+    fun: float
+    motion_time: float
+    error: float
+    nit: int
+    nfev: int
+    converged: bool
+    history_fun: np.ndarray = field(repr=False)
+    history_error: np.ndarray = field(repr=False)
+
+
+class History:
+    """Per-iteration record of the best F and its error, and the tolerance-based stopping rule.
+
+    The run has converged when the best F has improved by less than ``tol`` over the last
+    ``patience`` iterations while its error is within the reward threshold (the paper's
+    "convergence precision").
+    """
+
+    def __init__(self, max_iter: int, tol: float, patience: int, eps: float) -> None:
+        self.fun = np.empty(max_iter)
+        self.error = np.empty(max_iter)
+        self.n = 0
+        self.tol, self.patience, self.eps = tol, patience, eps
+
+    def record(self, fun: float, error: float) -> None:
+        self.fun[self.n] = fun
+        self.error[self.n] = error
+        self.n += 1
+
+    def stalled(self) -> bool:
+        if self.n <= self.patience or self.error[self.n - 1] > self.eps:
+            return False
+        return self.fun[self.n - 1 - self.patience] - self.fun[self.n - 1] < self.tol
+
+    def result(self, obj: Objective, x: np.ndarray, nfev: int, converged: bool) -> OptimizeResult:
+        ev = obj(x[None, :])
+        return OptimizeResult(
+            x=x.copy(), fun=float(ev.efficiency[0]), motion_time=float(ev.motion_time[0]),
+            error=float(ev.error[0]), nit=self.n, nfev=nfev, converged=converged,
+            history_fun=self.fun[: self.n].copy(), history_error=self.error[: self.n].copy())
+
+
+def initial_population(rng: np.random.Generator, lower: np.ndarray, upper: np.ndarray,
+                       shape: tuple[int, ...]) -> np.ndarray:
+    """Uniform random joint vectors inside the limits, shape ``shape + (dim,)``."""
+    return lower + (upper - lower) * rng.random(shape + lower.shape)

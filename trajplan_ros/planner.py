@@ -1,0 +1,157 @@
+"""Direct trajectory planning (Lv et al. 2019): search the final joint angles, then move there.
+
+``plan`` is the one entry point of the library, the ``trajplan`` command and the ROS node:
+
+    >>> from trajplan_ros import plan
+    >>> result = plan([0.151171, 0.19162, 0.172124], seed=1)
+    >>> result.status, round(result.motion_time_s, 3)
+    (<PlanStatus.SUCCEEDED: 'succeeded'>, 4.514)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from .arm import ArmModel, paper_arm
+from .baselines import de, ga, pso, spso
+from .fuzzy import RewardPunishment
+from .iepso import iepso
+from .objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
+from .optimize import OptimizeResult
+from .trajectory import Trajectory, servo_trajectory
+
+__all__ = ["ALGORITHMS", "PlanResult", "PlanStatus", "plan", "DEFAULT_TOLERANCE"]
+
+#: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
+ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
+    "iepso": iepso, "pso": pso, "spso": spso, "ga": ga, "de": de,
+}
+#: Largest error (m) that counts as reached unless the caller says otherwise.
+DEFAULT_TOLERANCE = 1e-6
+
+
+class PlanStatus(str, Enum):
+    """How a planning request ended."""
+
+    SUCCEEDED = "succeeded"        # reached within tolerance
+    NOT_REACHED = "not_reached"    # optimised, but the best answer misses the goal
+    REJECTED = "rejected"          # refused before optimisation (bad goal or start)
+
+
+@dataclass
+class PlanResult:
+    """Outcome of ``plan``; ``joint_goal`` is None when the request was rejected."""
+
+    status: PlanStatus
+    message: str
+    goal: np.ndarray
+    start: np.ndarray | None
+    joint_goal: np.ndarray | None = None
+    position_error_m: float = float("nan")
+    radial_error_rad: float = float("nan")
+    motion_time_s: float = float("nan")
+    efficiency: float = float("nan")
+    iterations: int = 0
+    evaluations: int = 0
+    plan_time_s: float = 0.0
+    algorithm: str = "iepso"
+    mode: str = Mode.FREE.value
+    omega: float = DEFAULT_OMEGA
+    history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    history_error: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+
+    @property
+    def success(self) -> bool:
+        return self.status is PlanStatus.SUCCEEDED
+
+    def trajectory(self, arm: ArmModel, sample_period: float = 0.1) -> Trajectory:
+        """The fixed-angular-velocity joint trajectory from the start to the joint goal."""
+        if self.joint_goal is None or self.start is None:
+            raise ValueError(f"no trajectory for a {self.status.value} plan: {self.message}")
+        return servo_trajectory(self.start, self.joint_goal, self.omega,
+                                sample_period=sample_period, joint_names=arm.joint_names)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready summary (the ``trajplan plan --json`` line)."""
+        def num(v: float) -> float | None:
+            return float(v) if np.isfinite(v) else None
+        return {
+            "goal": [num(v) for v in self.goal],
+            "success": self.success,
+            "status": self.status.value,
+            "joint_goal": None if self.joint_goal is None else [float(v) for v in self.joint_goal],
+            "position_error_m": num(self.position_error_m),
+            "radial_error_rad": num(self.radial_error_rad),
+            "motion_time_s": num(self.motion_time_s),
+            "efficiency": num(self.efficiency),
+            "iterations": self.iterations,
+            "evaluations": self.evaluations,
+            "plan_time_s": self.plan_time_s,
+            "algorithm": self.algorithm,
+            "mode": self.mode,
+            "message": self.message,
+        }
+
+
+def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
+         arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = "iepso",
+         omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
+         seed: int | np.random.Generator | None = None, population: int = 40,
+         max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
+         options: dict[str, Any] | None = None) -> PlanResult:
+    """Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
+
+    Args:
+        goal: tool position (x, y, z) in metres.
+        start: all joint angles now (rad); default the upright pose q = 0.
+        arm: the arm model; default ``paper_arm()``.
+        mode: "free" (position only) or "radial" (eq. 12-13 orientation constraint too).
+        algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga", "de".
+        omega: servo angular velocity (rad/s) of eq. (10).
+        tolerance: largest error (m) that counts as reached.
+        seed: random seed; the same seed gives the same answer, bit for bit.
+        population, max_iter, tol: swarm size, iteration cap and convergence precision.
+        shaping: the rewards-and-punishment settings (Table 4 defaults).
+        options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
+
+    Invalid goals and starts give a REJECTED result with the reason, never an exception;
+    invalid settings (unknown mode or algorithm, non-positive numbers) raise ValueError.
+    """
+    arm = arm if arm is not None else paper_arm()
+    mode = Mode(mode)
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise ValueError(f"tolerance must be finite and positive, got {tolerance}")
+    clock = time.perf_counter()
+    goal_arr = np.asarray(goal, dtype=float).ravel()
+    start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
+    common = dict(goal=goal_arr, algorithm=algorithm, mode=mode.value, omega=float(omega))
+    try:
+        obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping)
+    except InvalidRequest as exc:
+        return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
+    found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
+                                  seed=seed, **(options or {}))
+    joint_goal = obj.full(found.x)[0]
+    p, u = arm.tool(joint_goal[None, :])
+    pos_err = float(np.linalg.norm(p[0] - obj.goal))
+    radial_err = (float(abs(np.arccos(np.clip(u[0, 2], -1, 1)) - np.arccos(obj.axis_target)))
+                  if obj.radial else float("nan"))
+    reached = found.error <= tolerance
+    if reached:
+        status = PlanStatus.SUCCEEDED
+        message = f"reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m"
+    else:
+        status = PlanStatus.NOT_REACHED
+        message = (f"goal not reached: best error {found.error:.3g} m is above the tolerance "
+                   f"{tolerance:.3g} m")
+    return PlanResult(
+        status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
+        radial_error_rad=radial_err, motion_time_s=found.motion_time, efficiency=found.fun,
+        iterations=found.nit, evaluations=found.nfev, plan_time_s=time.perf_counter() - clock,
+        history_efficiency=found.history_fun, history_error=found.history_error, **common)

@@ -1,0 +1,114 @@
+"""Exact minimum motion time for the paper's arm family, for tests and benchmarks only.
+
+Reaching a point with the yaw + three-parallel-pitch joints of Lv et al.'s arm leaves one free
+parameter, phi = theta2 + theta3 + theta4 (DH). For each phi there are at most four exact
+solutions: two base branches (q1 = atan2(y, x) with r = +rho, or q1 +- pi with r = -rho) and two
+elbow branches of the planar a2/a3 pair (NOTES.md). A dense sweep over phi followed by zooming
+in on the best samples gives the true minimum of R (eq. 10) to about 1e-10 s. The planner never
+calls this: it only exists to check optimisers independently.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .arm import ArmModel
+
+__all__ = ["ExactOptimum", "exact_minimum", "radial_angle"]
+
+
+@dataclass(frozen=True)
+class ExactOptimum:
+    """The true minimum motion time and one configuration that attains it (NaN when none)."""
+
+    motion_time_s: float
+    joint_goal: np.ndarray
+
+
+def radial_angle(goal: np.ndarray) -> float:
+    """Eq. (13): the angle between the base z axis and the goal vector p, in [0, pi]."""
+    g = np.asarray(goal, dtype=float)
+    return float(np.arccos(np.clip(g[2] / np.linalg.norm(g), -1.0, 1.0)))
+
+
+def _check_family(arm: ArmModel) -> None:
+    half = np.pi / 2
+    ok = (arm.planned == 4 and arm.n_joints == 5 and np.isclose(arm.alpha[0], -half)
+          and np.allclose(arm.alpha[1:3], 0.0) and np.isclose(arm.alpha[3], half)
+          and np.allclose(arm.d[:4], 0.0) and arm.a[4] == 0.0)
+    if not ok:
+        raise ValueError("exact_minimum only knows arms shaped like the paper's (Table 3)")
+
+
+def _solutions(arm: ArmModel, goal: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """All exact solutions q (len(phi), 4 branches, 4) for each phi; NaN where none exists."""
+    a1, a2, a3, a4 = arm.a[:4]
+    d5 = arm.d[4]
+    x, y, z = goal
+    rho = np.hypot(x, y)
+    out = np.full((phi.size, 4, 4), np.nan)
+    base = np.arctan2(y, x)
+    cphi, sphi = np.cos(phi), np.sin(phi)
+    v = d5 * cphi - a4 * sphi - z
+    for b, (theta1, r) in enumerate(((base, rho), (base + np.pi, -rho))):
+        u = r - a1 - a4 * cphi - d5 * sphi
+        c3 = (u * u + v * v - a2 * a2 - a3 * a3) / (2 * a2 * a3)
+        ok = np.abs(c3) <= 1.0
+        for e, elbow in enumerate((1.0, -1.0)):
+            t3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
+            t2 = np.arctan2(v, u) - np.arctan2(a3 * np.sin(t3), a2 + a3 * np.cos(t3))
+            t4 = phi - t2 - t3
+            theta = np.stack((np.full_like(phi, theta1), t2, t3, t4), axis=1)
+            q = (theta - arm.offset[:4]) / arm.sign[:4]
+            q = np.mod(q + np.pi, 2 * np.pi) - np.pi
+            q[~ok] = np.nan
+            out[:, 2 * b + e] = q
+    return out
+
+
+def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.ndarray:
+    inside = np.all((q >= arm.lower[:4]) & (q <= arm.upper[:4]), axis=-1)
+    t = np.max(np.abs(q - start[:4]), axis=-1) / omega
+    return np.where(inside, t, np.inf)
+
+
+def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
+                  mode: str = "free", samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
+    """True minimum of R = max|q - start| / omega over all in-limit q that reach ``goal`` exactly.
+
+    mode "free": sweep phi over [-pi, pi]; mode "radial": phi is fixed by eq. (12)-(13) to
+    +-radial_angle(goal) (the tool axis at the goal's polar angle from the base z axis).
+    Ties are broken by the least total joint travel, as the planner does.
+    """
+    _check_family(arm)
+    goal = np.asarray(goal, dtype=float)
+    start = np.asarray(start, dtype=float)
+    if mode == "radial":
+        eps = radial_angle(goal)
+        phis = np.array([eps, -eps])
+        q = _solutions(arm, goal, phis).reshape(-1, 4)
+        t = _times(arm, q, start, omega)
+    elif mode == "free":
+        phis = np.linspace(-np.pi, np.pi, samples)
+        step = phis[1] - phis[0]
+        for _ in range(zoom_levels):
+            q = _solutions(arm, goal, phis)
+            t = _times(arm, q, start, omega).min(axis=1)
+            finite = np.isfinite(t)
+            if not finite.any():
+                break
+            best = phis[finite][np.argsort(t[finite])[:16]]
+            step /= 50.0
+            offsets = np.arange(-100, 101) * step
+            phis = np.unique((best[:, None] + offsets[None, :]).ravel())
+        q = _solutions(arm, goal, phis).reshape(-1, 4)
+        t = _times(arm, q, start, omega)
+    else:
+        raise ValueError(f"mode must be 'free' or 'radial', got {mode!r}")
+    if not np.isfinite(t).any():
+        return ExactOptimum(np.inf, np.full(4, np.nan))
+    tmin = t.min()
+    tied = np.flatnonzero(t <= tmin * (1 + 1e-12) + 1e-15)
+    travel = np.abs(q[tied] - start[:4]).sum(axis=1)
+    return ExactOptimum(float(tmin), q[tied[np.argmin(travel)]].copy())
