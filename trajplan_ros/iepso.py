@@ -15,11 +15,16 @@ Additions of ours, documented in the README, each on by default because it measu
 
 * several independent swarms advance in one array (``swarms``), so the vectorised cost of an
   iteration barely grows, and agreement between swarms is the stopping rule;
-* a memetic polish: every ``polish_period`` iterations each swarm's best particle is refined by
-  ``polish.polish`` (exact reach, least motion time along the solutions) and put back into the
-  swarm, which carries on from there;
-* the run stops when the best polished F has improved by less than ``tol`` since the previous
-  polish and at least two swarms hold it (within ``tol``), or after ``max_iter`` iterations.
+* a memetic polish: every ``polish_period`` iterations each swarm's best particle and
+  ``polish_count - 1`` random members (for diversity: the polish from a random member often
+  lands on a solution branch the swarm has not settled on) are refined by ``polish.polish``
+  (exact reach, least motion time along the solutions, at most ``polish_steps`` steps); the best
+  refined one goes back into its swarm, which carries on from there;
+* swarm-level last-elimination (``restart``): after a polish round, swarms whose best is worse
+  than the overall best by more than ``tol`` are drawn anew;
+* the run stops when, after a polish round, the best F has improved by less than ``tol`` since
+  the previous round and at least ``agreement`` swarms hold it, or when it has not improved for
+  ``patience_rounds`` rounds, or after ``max_iter`` iterations.
 """
 from __future__ import annotations
 
@@ -34,7 +39,9 @@ __all__ = ["iepso"]
 
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
           seed: int | np.random.Generator | None = None, swarms: int = 8, polish: bool = True,
-          polish_period: int = 5, polish_count: int = 2, polish_steps: int = 10, elimination: float = 0.1, elimination_period: int = 5,
+          polish_period: int = 5, polish_count: int = 2, polish_steps: int = 10,
+          agreement: int = 2, patience_rounds: int = 4, restart: bool = True,
+          elimination: float = 0.1, elimination_period: int = 5,
           inertia: tuple[float, float] = (0.9, 0.4), c1: float = 2.0, c2: float = 2.0,
           c3: tuple[float, float] = (2.0, 0.0), max_velocity: float = 0.2) -> OptimizeResult:
     """Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
@@ -42,8 +49,9 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``max_velocity`` caps each velocity component at that fraction of the joint's range.
     Without ``polish`` this is the paper's algorithm alone, stopped by ``History.stalled``.
     """
-    if population < 2 or swarms < 1 or max_iter < 1:
-        raise ValueError("population must be >= 2, swarms >= 1 and max_iter >= 1")
+    if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
+        raise ValueError("population must be >= 2; swarms, max_iter, polish_count and "
+                         "polish_period >= 1")
     rng = np.random.default_rng(seed)
     lo, hi = obj.lower, obj.upper
     span = hi - lo
@@ -62,6 +70,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     g_idx = np.argmin(pbest_f, axis=1)
     history = History(max_iter, tol, patience=50, eps=obj.shaping.eps)
     last_polished = np.inf
+    stable_rounds = 0
     converged = False
 
     for it in range(max_iter):
@@ -92,7 +101,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
         g_idx = np.argmin(pbest_f, axis=1)
 
         if polish and (it + 1) % polish_period == 0:
-            top = np.argsort(pbest_f, axis=1)[:, :polish_count]            # (s, count)
+            # candidates: each swarm's best, and random members for diversity
+            top = np.concatenate((g_idx[:, None], rng.integers(0, p, (s, polish_count - 1))), axis=1)
             refined = polish_candidates(obj, pbest[rows[:, None], top].reshape(-1, dim),
                                         max_steps=polish_steps)
             rev = obj(refined)
@@ -110,9 +120,23 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             swarm_best = pbest_f[rows, g_idx]
             best = swarm_best.min()
             agree = np.count_nonzero(swarm_best <= best + tol)
-            if last_polished - best < tol and agree >= min(2, s) and rev.error.min() <= obj.shaping.eps:
-                converged = True
+            stable_rounds = stable_rounds + 1 if last_polished - best < tol else 0
             last_polished = best
+            if rev.error.min() <= obj.shaping.eps and (
+                    (stable_rounds >= 1 and agree >= min(agreement, s)) or stable_rounds >= patience_rounds):
+                converged = True
+            elif restart:
+                # swarm-level last-elimination: swarms stuck above the best start afresh
+                lost = rows[swarm_best > best + tol]
+                x[lost] = initial_population(rng, lo, hi, (lost.size, p))
+                v[lost] = 0.0
+                ev = obj(x[lost].reshape(-1, dim))
+                nfev += lost.size * p
+                pbest[lost] = x[lost]
+                pbest_f[lost] = ev.efficiency.reshape(-1, p)
+                pbest_err[lost] = ev.error.reshape(-1, p)
+                f[lost] = pbest_f[lost]
+                g_idx = np.argmin(pbest_f, axis=1)
 
         flat = int(np.argmin(pbest_f[rows, g_idx]))
         history.record(float(pbest_f[flat, g_idx[flat]]), float(pbest_err[flat, g_idx[flat]]))

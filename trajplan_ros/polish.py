@@ -101,7 +101,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         accept = live & (m_trial < merit)
         x[accept] = trial[accept]
         merit[accept] = m_trial[accept]
-        delta = np.where(accept, np.minimum(2 * delta, trust), delta / 4)
+        delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
         live &= (moved > 1e-13) & (delta > 1e-13)
         if not live.any():
             break
