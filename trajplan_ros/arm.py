@@ -109,49 +109,48 @@ class ArmModel:
 
     def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints)."""
-        x, y, z = self._chain(np.asarray(q, dtype=float), jacobian=False)
-        return np.stack((x[0], y[0], z[0]), axis=1), np.stack((x[1], y[1], z[1]), axis=1)
+        w, z = self._chain(np.asarray(q, dtype=float), jacobian=False)
+        return (np.stack((w[0].real, w[0].imag, z[0]), axis=1),
+                np.stack((w[1].real, w[1].imag, z[1]), axis=1))
 
     def tool_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Tool position p, axis u (N, 3) and their derivatives Jp, Ju (N, 3, planned).
 
         For revolute joint i, dp/dq_i = sign_i z_{i-1} x (p - o_{i-1}) and du/dq_i = sign_i z_{i-1} x u.
         """
-        x, y, z = self._chain(np.asarray(q, dtype=float), jacobian=True)
-        vec = np.stack((x, y, z), axis=-1)                    # (2 + 2 planned, N, 3)
+        w, z = self._chain(np.asarray(q, dtype=float), jacobian=True)
+        vec = np.stack((w.real, w.imag, z), axis=-1)               # (2 + 2 planned, N, 3)
         jac = np.moveaxis(vec[2:].reshape(self.planned, 2, -1, 3), 0, -1)   # (2, N, 3, planned)
         return vec[0], vec[1], jac[0], jac[1]
 
-    def _chain(self, q: np.ndarray, jacobian: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _chain(self, q: np.ndarray, jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
         """Walk the chain from the tool to the base (the hot path of every optimiser).
 
-        Rows of the returned x, y, z arrays (each (rows, N)) are the tool point, the tool axis
-        and, with ``jacobian``, d(point)/dq_i and d(axis)/dq_i for each planned joint. Per joint
-        it applies v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the
-        translation only to the point), so the cost is a few array operations per joint
-        whatever N is. The derivative rows for joint i are born in frame i-1 as z x v and then
-        rotated with everything else.
+        Returns w = x + i y (complex) and z, each (rows, N): row 0 is the tool point, row 1 the
+        tool axis and, with ``jacobian``, rows 2 + 2i and 3 + 2i are d(point)/dq_i and
+        d(axis)/dq_i for each planned joint i. Per joint it applies
+        v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the translation
+        only to the point), the rotation about z as one complex product, so the cost is a few
+        array operations per joint whatever N is. The derivative rows for joint i are born in
+        frame i-1 as z x v (i v in complex form) and then rotated with everything else.
         """
-        theta = q * self.sign + self.offset
-        cos_t, sin_t = np.cos(theta).T, np.sin(theta).T
+        rot = np.exp(1j * (q * self.sign + self.offset)).T          # (n_joints, N)
         rows = 2 + 2 * self.planned if jacobian else 2
-        x = np.zeros((rows, q.shape[0]))
-        y = np.zeros_like(x)
-        z = np.zeros_like(x)
+        w = np.zeros((rows, q.shape[0]), dtype=complex)
+        z = np.zeros((rows, q.shape[0]))
         z[1] = 1.0
         for i in range(self.n_joints - 1, -1, -1):
             ca, sa = self._cos_alpha[i], self._sin_alpha[i]
             if sa != 0.0 or ca != 1.0:
-                y, z = ca * y - sa * z, sa * y + ca * z
-            x[0] += self.a[i]
+                y = w.imag
+                w = w.real + 1j * (ca * y - sa * z)
+                z = sa * y + ca * z
+            w[0] += self.a[i]
             z[0] += self.d[i]
-            c, s = cos_t[i], sin_t[i]
-            x, y = c * x - s * y, s * x + c * y
+            w *= rot[i]
             if jacobian and i < self.planned:
-                r = 2 + 2 * i
-                x[r:r + 2] = -self.sign[i] * y[:2]
-                y[r:r + 2] = self.sign[i] * x[:2]
-        return x, y, z
+                w[2 + 2 * i: 4 + 2 * i] = (1j * self.sign[i]) * w[:2]
+        return w, z
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """Homogeneous transforms of every frame, shape (N, n_joints + 1, 4, 4); index 0 is the base."""

@@ -1,21 +1,27 @@
 """Local polish of candidate joint goals: exact reach, then least motion time along the solutions.
 
 Not part of the paper. The swarm finds the basin; this finishes the job to machine precision.
-It is sequential linear programming on
+It solves
 
     minimise max_i |x_i - start_i|   subject to   c(x) = 0 (reach, and the axis in radial mode),
                                                    lower <= x <= upper,
 
-vectorised over K candidates. Each step linearises c, takes the minimum-norm Newton correction
--J^+ c, and then moves along the null space of J (the directions that keep the goal reached)
-to where the linearised motion time is least. Along one null direction that is a convex
-piecewise-linear function of one variable, minimised exactly by checking its breakpoints; ties
+vectorised over K candidates, by sequential quadratic-model steps. Each step linearises c and
+takes the minimum-norm Newton correction -J^+ c; then it moves along the null space of J (the
+directions that keep the goal reached). Along a null direction n the solutions curve away from
+the straight line; one extra forward-kinematics call gives that curvature
+(x'' = -J^+ d2c/dz2), so each joint's displacement is modelled as a parabola in the step z.
+The motion time, the largest of those |parabolas|, is minimised over z exactly by checking every
+candidate point (vertices of the max, stationary points, zeros, bounds). That converges fast
+both where two joints tie and where one joint's displacement is at a smooth minimum. Ties
 (every joint but the slowest has slack) go to the least total joint travel, which makes plans
 repeatable. With more than one null direction (arms with more than four planned joints) the
 directions are taken in turn, a coordinate descent that may stop short of the optimum.
 A trust radius, a second-order correction and the merit R + W |c| make the steps safe.
 """
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -26,23 +32,39 @@ __all__ = ["polish"]
 _TIE = 1e-12
 
 
-def _line_minimax(b: np.ndarray, n: np.ndarray, zlo: np.ndarray, zhi: np.ndarray) -> np.ndarray:
-    """argmin over z in [zlo, zhi] of max_i |b_i + n_i z|, ties to least sum_i |b_i + n_i z|.
+@functools.lru_cache(maxsize=8)
+def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.triu_indices(m, 1)
 
-    b, n: (K, m); zlo, zhi: (K,). Returns z (K,).
-    """
-    m = b.shape[1]
-    iu, ju = np.triu_indices(m, 1)
+
+def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        cand = np.concatenate((
-            -(b[:, iu] - b[:, ju]) / (n[:, iu] - n[:, ju]),
-            -(b[:, iu] + b[:, ju]) / (n[:, iu] + n[:, ju]),
-            -b / n,
-            zlo[:, None], zhi[:, None], np.zeros((b.shape[0], 1)),
-        ), axis=1)
-    cand = np.where(np.isfinite(cand), cand, 0.0)
-    cand = np.clip(cand, zlo[:, None], zhi[:, None])
-    d = np.abs(b[:, None, :] + n[:, None, :] * cand[:, :, None])        # (K, C, m)
+        disc = qb * qb - 4.0 * qa * qc
+        q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
+        flat = np.abs(qa) <= 1e-14 * (np.abs(qb) + 1e-300)
+        r1 = np.where(flat, -qc / qb, q / qa)
+        r2 = np.where(flat, np.nan, qc / q)
+    return r1, r2
+
+
+def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
+                  zhi: np.ndarray) -> np.ndarray:
+    """argmin over z in [zlo, zhi] of max_i |b_i + n_i z + a_i z^2|, ties to least total travel.
+
+    b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
+    """
+    iu, ju = _pairs(b.shape[1])
+    # |q_i| = |q_j| where q_i - q_j = 0 or q_i + q_j = 0; zeros of q_i; all as quadratics
+    qa = np.concatenate((a[:, iu] - a[:, ju], a[:, iu] + a[:, ju], a), axis=1)
+    qb = np.concatenate((n[:, iu] - n[:, ju], n[:, iu] + n[:, ju], n), axis=1)
+    qc = np.concatenate((b[:, iu] - b[:, ju], b[:, iu] + b[:, ju], b), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cand = np.concatenate((*_roots(qa, qb, qc), -n / (2.0 * a), zlo[:, None], zhi[:, None],
+                               np.zeros((b.shape[0], 1))), axis=1)
+    cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo[:, None], zhi[:, None])
+    z = cand[:, :, None]
+    d = np.abs(b[:, None, :] + (n[:, None, :] + a[:, None, :] * z) * z)   # (K, C, m)
     worst = d.max(axis=2)
     total = d.sum(axis=2)
     best = worst.min(axis=1, keepdims=True)
@@ -50,11 +72,35 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, zlo: np.ndarray, zhi: np.ndarray
     return cand[np.arange(b.shape[0]), np.argmin(total, axis=1)]
 
 
-def _merit(obj: Objective, x: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray]:
-    """Residuals c(x) and the merit max_i |x_i - start_i| + weight |c(x)|."""
+def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
     p, u = obj.arm.tool(obj.full(x))
-    c = obj.residuals(p, u)
-    return c, obj.motion_time(x) * obj.omega + weight * np.linalg.norm(c, axis=1)
+    return obj.residuals(p, u)
+
+
+class _Linearisation:
+    """c(x), merit, and the SVD of the constraint Jacobian at K points."""
+
+    def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
+        p, u, jp, ju = obj.arm.tool_jacobian(obj.full(x))
+        self.c = obj.residuals(p, u)
+        self.merit = obj.motion_time(x) * obj.omega + weight * np.linalg.norm(self.c, axis=1)
+        jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
+        self.u, s, self.vt = np.linalg.svd(jac, full_matrices=True)
+        rank = min(jac.shape[1:])
+        self.s_inv = np.where(s > 1e-9 * s[:, :1], 1.0 / np.where(s > 0, s, 1.0), 0.0)[:, :rank]
+        self.rank = rank
+
+    def newton(self, res: np.ndarray) -> np.ndarray:
+        """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
+        r = self.rank
+        coef = (np.swapaxes(self.u[:, :, :r], 1, 2) @ res[:, :, None])[:, :, 0] * self.s_inv
+        return -(np.swapaxes(self.vt[:, :r, :], 1, 2) @ coef[:, :, None])[:, :, 0]
+
+    def keep(self, other: "_Linearisation", mask: np.ndarray) -> None:
+        """Take other's values where mask is true."""
+        for name in ("c", "merit", "u", "vt", "s_inv"):
+            mine, theirs = getattr(self, name), getattr(other, name)
+            mine[mask] = theirs[mask]
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5) -> np.ndarray:
@@ -63,44 +109,35 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     start = obj.start[: obj.arm.planned]
     x = np.clip(np.array(x, dtype=float, ndmin=2), lo, hi)
     k, m = x.shape
-    rank = min(obj.n_constraints, m)
     # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
     # multiplier of this problem, so that the merit's minimum is the constrained one.
     weight = 1e3 / obj.arm.reach
-    _, merit = _merit(obj, x, weight)
+    probe = 1e-4                              # rad, finite-difference step for the curvature
+    here = _Linearisation(obj, x, weight)
     delta = np.full(k, trust)
     live = np.ones(k, dtype=bool)
     for _ in range(max_steps):
-        p, u, jp, ju = obj.arm.tool_jacobian(obj.full(x))
-        c = obj.residuals(p, u)
-        jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
-        u_, s_, vt = np.linalg.svd(jac, full_matrices=True)
-        s_inv = np.where(s_ > 1e-9 * s_[:, :1], 1.0 / np.where(s_ > 0, s_, 1.0), 0.0)[:, :rank]
-        u_r, vt_r = u_[:, :, :rank], vt[:, :rank, :]
-
-        def newton(res: np.ndarray) -> np.ndarray:
-            return -np.einsum("kij,ki->kj", vt_r, np.einsum("kri,kr->ki", u_r, res) * s_inv)
-
-        step = newton(c)
+        step = here.newton(here.c)
         size = np.linalg.norm(step, axis=1)
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
-        for j in range(rank, m):
-            direction = vt[:, j, :]
+        for j in range(here.rank, m):
+            direction = here.vt[:, j, :]
+            half_curv = 0.5 * here.newton(2.0 * (_residuals(obj, x + probe * direction) - here.c)
+                                          / probe ** 2)              # x''/2 along the direction
             safe = np.where(np.abs(direction) > 1e-15, direction, np.nan)
             a_lo, a_hi = (lo - base) / safe, (hi - base) / safe
             zlo = np.maximum(-delta, np.nanmax(np.fmin(a_lo, a_hi), axis=1, initial=-np.inf))
             zhi = np.maximum(np.minimum(delta, np.nanmin(np.fmax(a_lo, a_hi), axis=1, initial=np.inf)), zlo)
-            z = _line_minimax(base - start, direction, zlo, zhi)
-            base = base + z[:, None] * direction
+            z = _line_minimax(base - start, direction, half_curv, zlo, zhi)[:, None]
+            base = base + (direction + half_curv * z) * z
         trial = np.clip(base, lo, hi)
-        c_trial, _ = _merit(obj, trial, weight)
-        trial = np.clip(trial + newton(c_trial), lo, hi)      # second-order correction
-        _, m_trial = _merit(obj, trial, weight)
+        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)   # second-order correction
+        there = _Linearisation(obj, trial, weight)
         moved = np.max(np.abs(trial - x), axis=1)
-        accept = live & (m_trial < merit)
+        accept = live & (there.merit < here.merit)
         x[accept] = trial[accept]
-        merit[accept] = m_trial[accept]
+        here.keep(there, accept)
         delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
         live &= (moved > 1e-13) & (delta > 1e-13)
         if not live.any():
