@@ -1,0 +1,78 @@
+"""Arm model: DH forward kinematics, Jacobians and validation (eq. 1-2, Tables 3-4)."""
+import numpy as np
+import pytest
+
+from trajplan_ros.arm import ArmModel, InvalidArmModel, paper_arm
+
+PAPER_TARGET = np.array([0.151171, 0.19162, 0.172124])
+
+
+def random_arm(rng: np.random.Generator, n: int) -> ArmModel:
+    return ArmModel(a=rng.uniform(0, 0.2, n), alpha=rng.choice([0, np.pi / 2, -np.pi / 2, 0.3], n),
+                    d=rng.uniform(0, 0.1, n), sign=rng.choice([-1, 1], n),
+                    offset=rng.uniform(-1, 1, n), lower=-np.full(n, 2.5), upper=np.full(n, 2.5))
+
+
+def test_paper_arm_upright_pose_is_the_papers_initial_position():
+    p, u = paper_arm().tool(np.zeros((1, 5)))
+    np.testing.assert_allclose(p[0], [0.037, 0.0, 0.337], atol=1e-15)
+    np.testing.assert_allclose(u[0], [0.0, 0.0, 1.0], atol=1e-15)
+
+
+def test_table5_iepso_row_lands_on_the_papers_target():
+    p, _ = paper_arm().tool(np.array([[0.9, 1.49, -0.23, 1.17, 0.0]]))
+    # Table 5 rounds to 0.01 rad; NOTES.md measured 0.8 mm
+    assert np.linalg.norm(p[0] - PAPER_TARGET) == pytest.approx(0.805e-3, abs=0.01e-3)
+
+
+@pytest.mark.parametrize("n", [2, 5, 7])
+def test_chain_walk_matches_homogeneous_transforms(n):
+    rng = np.random.default_rng(n)
+    arm = paper_arm() if n == 5 else random_arm(rng, n)
+    q = rng.uniform(arm.lower, arm.upper, (50, arm.n_joints))
+    p, u = arm.tool(q)
+    frames = arm.frames(q)
+    np.testing.assert_allclose(p, frames[:, -1, :3, 3], atol=1e-14)
+    np.testing.assert_allclose(u, frames[:, -1, :3, 2], atol=1e-14)
+
+
+@pytest.mark.parametrize("n", [3, 5, 7])
+def test_jacobian_matches_finite_differences(n):
+    rng = np.random.default_rng(10 + n)
+    arm = paper_arm() if n == 5 else random_arm(rng, n)
+    q = rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
+    p, u, jp, ju = arm.tool_jacobian(q)
+    np.testing.assert_allclose(p, arm.tool(q)[0], atol=1e-15)
+    h = 1e-6
+    for i in range(arm.planned):
+        dq = np.zeros(arm.n_joints)
+        dq[i] = h
+        (pp, up), (pm, um) = arm.tool(q + dq), arm.tool(q - dq)
+        np.testing.assert_allclose(jp[:, :, i], (pp - pm) / (2 * h), atol=1e-8)
+        np.testing.assert_allclose(ju[:, :, i], (up - um) / (2 * h), atol=1e-8)
+
+
+def test_reach_bounds_every_tool_position():
+    arm = paper_arm()
+    q = np.random.default_rng(3).uniform(arm.lower, arm.upper, (5000, 5))
+    assert np.linalg.norm(arm.tool(q)[0], axis=1).max() <= arm.reach
+
+
+@pytest.mark.parametrize("change, reason", [
+    (dict(a=[0.1, np.nan]), "non-finite"),
+    (dict(lower=[0.0, 1.0], upper=[1.0, 0.5]), "lower limit"),
+    (dict(sign=[1, 2]), "sign"),
+    (dict(joint_names=["j", "j"]), "distinct"),
+    (dict(planned=1), "planned"),
+    (dict(d=[0.0]), "needs 2 values"),
+])
+def test_invalid_models_are_refused_with_a_reason(change, reason):
+    spec = dict(a=[0.1, 0.1], alpha=[0, 0], d=[0, 0], lower=[-1, -1], upper=[1, 1])
+    spec.update(change)
+    with pytest.raises(InvalidArmModel, match=reason):
+        ArmModel(**spec)
+
+
+def test_an_arm_without_joints_is_refused():
+    with pytest.raises(InvalidArmModel, match="no joints"):
+        ArmModel(a=[], alpha=[], d=[], lower=[], upper=[])

@@ -1,0 +1,29 @@
+"""Comparison algorithms of section VI.B on the same objective and budget."""
+import numpy as np
+import pytest
+
+from trajplan_ros.arm import paper_arm
+from trajplan_ros.objective import Objective
+from trajplan_ros.planner import ALGORITHMS
+
+TARGET = np.array([0.151171, 0.19162, 0.172124])
+
+
+@pytest.mark.parametrize("name", ["pso", "spso", "ga", "de"])
+def test_baseline_runs_within_budget_and_improves(name):
+    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    res = ALGORITHMS[name](obj, population=40, max_iter=120, seed=7)
+    assert res.nfev <= 40 * (120 + 1)
+    assert res.nit == res.history_fun.size <= 120
+    assert np.all(np.diff(res.history_fun) <= 0)
+    assert res.fun == pytest.approx(obj(res.x[None, :]).efficiency[0])
+    assert res.history_fun[-1] < res.history_fun[0]
+    assert np.all((res.x >= obj.lower) & (res.x <= obj.upper))
+
+
+@pytest.mark.parametrize("name", ["pso", "spso", "ga", "de"])
+def test_baseline_is_deterministic(name):
+    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    a = ALGORITHMS[name](obj, max_iter=30, seed=3)
+    b = ALGORITHMS[name](obj, max_iter=30, seed=3)
+    assert a.x.tobytes() == b.x.tobytes()

@@ -1,0 +1,68 @@
+"""IEPSO (eq. 3-5) with polish: exact answers against the reference, determinism, any arm."""
+import numpy as np
+import pytest
+
+from trajplan_ros.arm import ArmModel, paper_arm
+from trajplan_ros.iepso import iepso
+from trajplan_ros.objective import Objective
+from trajplan_ros.reference import exact_minimum
+
+ARM = paper_arm()
+TARGET = np.array([0.151171, 0.19162, 0.172124])
+
+
+@pytest.mark.parametrize("mode", ["free", "radial"])
+def test_paper_target_exact_optimum(mode):
+    obj = Objective(ARM, TARGET, np.zeros(5), mode=mode)
+    ref = exact_minimum(ARM, TARGET, np.zeros(5), mode=mode)
+    res = iepso(obj, seed=0)
+    assert res.error <= 1e-9
+    assert res.motion_time <= ref.motion_time_s * 1.001
+    assert res.converged
+
+
+def test_random_goals_and_starts_reach_the_exact_optimum():
+    rng = np.random.default_rng(2024)
+    for i in range(12):
+        goal = ARM.tool(rng.uniform(ARM.lower, ARM.upper, (1, 5)))[0][0]
+        start = rng.uniform(ARM.lower, ARM.upper)
+        res = iepso(Objective(ARM, goal, start), seed=i)
+        ref = exact_minimum(ARM, goal, start)
+        assert res.error <= 1e-6, i
+        assert res.motion_time <= ref.motion_time_s * 1.001, i
+
+
+def test_same_seed_same_answer_bit_for_bit():
+    obj = Objective(ARM, TARGET, np.array([0.3, -0.2, 0.1, 0.4, 0.0]))
+    a, b = iepso(obj, seed=42), iepso(obj, seed=42)
+    assert a.x.tobytes() == b.x.tobytes()
+    np.testing.assert_array_equal(a.history_fun, b.history_fun)
+
+
+def test_history_is_a_monotone_record_of_the_best():
+    res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=3, polish=False, max_iter=150)
+    assert res.nit == res.history_fun.size == res.history_error.size
+    assert np.all(np.diff(res.history_fun) <= 0)
+    assert res.nfev >= res.nit * 40
+
+
+def test_papers_iepso_alone_gets_close_but_not_exact():
+    res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=1, polish=False, swarms=1)
+    assert res.error < 5e-6            # within the reward threshold eps
+    assert res.fun < 0
+
+
+@pytest.mark.parametrize("n", [2, 3, 6, 7])
+def test_other_chains_reach_goals_from_their_own_configurations(n):
+    rng = np.random.default_rng(100 + n)
+    arm = ArmModel(a=rng.uniform(0.05, 0.15, n), alpha=rng.choice([0.0, np.pi / 2, -np.pi / 2], n),
+                   d=rng.uniform(0.0, 0.1, n), lower=-np.full(n, 2.6), upper=np.full(n, 2.6))
+    for k in range(3):
+        goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, n)))[0][0]
+        res = iepso(Objective(arm, goal, np.zeros(n)), seed=k)
+        assert res.error <= 1e-6, (n, k)
+
+
+def test_bad_settings_raise():
+    with pytest.raises(ValueError):
+        iepso(Objective(ARM, TARGET, np.zeros(5)), population=1)

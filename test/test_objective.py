@@ -1,0 +1,59 @@
+"""Objective F = R + S (eq. 9-14): values, modes and refused requests."""
+import numpy as np
+import pytest
+
+from trajplan_ros.arm import paper_arm
+from trajplan_ros.objective import InvalidRequest, Objective
+from trajplan_ros.reference import exact_minimum
+
+ARM = paper_arm()
+TARGET = np.array([0.151171, 0.19162, 0.172124])
+
+
+def test_motion_time_is_eq10():
+    obj = Objective(ARM, TARGET, np.zeros(5))
+    x = np.array([[0.9, 1.49, -0.23, 1.17]])
+    assert obj.motion_time(x)[0] == pytest.approx(1.49 / 0.2)
+
+
+def test_efficiency_at_an_exact_solution_is_r_minus_24():
+    ref = exact_minimum(ARM, TARGET, np.zeros(5))
+    ev = Objective(ARM, TARGET, np.zeros(5))(ref.joint_goal[None, :])
+    assert ev.error[0] < 1e-15
+    assert ev.efficiency[0] == pytest.approx(ref.motion_time_s - 24.0, abs=1e-4)   # F* = -19.49
+
+
+def test_radial_error_vanishes_only_at_radial_solutions():
+    free = exact_minimum(ARM, TARGET, np.zeros(5)).joint_goal[None, :]
+    radial = exact_minimum(ARM, TARGET, np.zeros(5), mode="radial").joint_goal[None, :]
+    obj = Objective(ARM, TARGET, np.zeros(5), mode="radial")
+    assert obj(radial).error[0] < 1e-12
+    assert obj(free).error[0] > 1e-3
+
+
+def test_vectorised_over_particles():
+    obj = Objective(ARM, TARGET, np.zeros(5))
+    x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (64, 4))
+    batch = obj(x)
+    single = [obj(row[None, :]) for row in x[:3]]
+    np.testing.assert_allclose(batch.efficiency[:3], [e.efficiency[0] for e in single])
+
+
+@pytest.mark.parametrize("goal, start, reason", [
+    ([np.nan, 0.1, 0.1], None, "non-finite"),
+    ([0.3, 0.3, 0.3], None, "beyond the arm's reach"),
+    ([0.1, 0.1], None, "3 coordinates"),
+    (TARGET, [0, 0, 0, 0, 4.0], "outside its limits"),
+    (TARGET, [0, 0, np.inf, 0, 0], "non-finite"),
+    (TARGET, [0, 0, 0], "5 joint angles"),
+])
+def test_bad_requests_are_refused_before_optimisation(goal, start, reason):
+    with pytest.raises(InvalidRequest, match=reason):
+        Objective(ARM, np.asarray(goal, dtype=float), np.zeros(5) if start is None else np.asarray(start, dtype=float))
+
+
+def test_bad_settings_raise():
+    with pytest.raises(ValueError):
+        Objective(ARM, TARGET, np.zeros(5), omega=0.0)
+    with pytest.raises(ValueError):
+        Objective(ARM, TARGET, np.zeros(5), mode="sideways")
