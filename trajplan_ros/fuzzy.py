@@ -54,6 +54,7 @@ _CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]
 _TIME_CENTRES = {"L": 0.0, "M": 0.5, "H": 1.0}
 _SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]] for row in ("H", "M", "L")])
 _ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ("H", "M", "L")])
+_ONES = np.ones(_SINGLETONS.size)
 
 
 def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
@@ -124,12 +125,16 @@ class RewardPunishment:
         return np.clip(np.where(err <= self.eps, reward_side, punish_side), -1.0, 1.0)
 
     def rule_degree(self, lam: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau."""
-        mu_col = gaussian(lam[..., None], _CLOSENESS_CENTRES, self.sigma)          # (..., 8)
-        mu_row = gaussian(tau[..., None], _ROW_CENTRES, 2 * self.sigma)            # (..., 3)
-        weight = np.minimum(mu_row[..., :, None], mu_col[..., None, :])            # (..., 3, 8)
-        total = weight.sum(axis=(-2, -1))
-        return np.einsum("...rc,rc->...", weight, _SINGLETONS) / total
+        """Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau.
+
+        Rule strength is min(mu_row(tau), mu_col(lambda)) (eq. 6); the degree is the
+        strength-weighted mean of the rules' output levels.
+        """
+        lam, tau = np.asarray(lam, dtype=float), np.asarray(tau, dtype=float)
+        mu_col = gaussian(lam.ravel()[None, :], _CLOSENESS_CENTRES[:, None], self.sigma)   # (8, N)
+        mu_row = gaussian(tau.ravel()[None, :], _ROW_CENTRES[:, None], 2 * self.sigma)     # (3, N)
+        weight = np.minimum(mu_row[:, None, :], mu_col[None, :, :]).reshape(-1, lam.size)  # (24, N)
+        return ((_SINGLETONS.ravel() @ weight) / (_ONES @ weight)).reshape(lam.shape)
 
     def punishment(self, lam: np.ndarray) -> np.ndarray:
         """Eq. (16): alpha = k exp(-5 (lambda + 1)^2)."""

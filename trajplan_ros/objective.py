@@ -13,6 +13,7 @@ dimensionless axis residual into metres.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from enum import Enum
 
@@ -125,7 +126,9 @@ class Objective:
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
         """Eq. (10): R = max_i |x_i - start_i| / omega."""
-        return np.max(np.abs(x - self.start[: self.arm.planned]), axis=-1) / self.omega
+        moved = np.abs(x - self.start[: self.arm.planned])
+        # a fold over the few joints is several times faster than np.max(..., axis=-1)
+        return functools.reduce(np.maximum, np.moveaxis(moved, -1, 0)) / self.omega
 
     def __call__(self, x: np.ndarray) -> Evaluation:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""

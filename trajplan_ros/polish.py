@@ -38,14 +38,14 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        disc = qb * qb - 4.0 * qa * qc
-        q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
-        flat = np.abs(qa) <= 1e-14 * (np.abs(qb) + 1e-300)
-        r1 = np.where(flat, -qc / qb, q / qa)
-        r2 = np.where(flat, np.nan, qc / q)
-    return r1, r2
+    """Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable.
+
+    Call inside np.errstate(divide="ignore", invalid="ignore").
+    """
+    disc = qb * qb - 4.0 * qa * qc
+    q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
+    flat = np.abs(qa) <= 1e-14 * (np.abs(qb) + 1e-300)
+    return np.where(flat, -qc / qb, q / qa), np.where(flat, np.nan, qc / q)
 
 
 def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
@@ -55,21 +55,20 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
     b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
     """
     iu, ju = _pairs(b.shape[1])
+    bt, nt, at = b.T, n.T, a.T                                         # (m, K): fast broadcasting
     # |q_i| = |q_j| where q_i - q_j = 0 or q_i + q_j = 0; zeros of q_i; all as quadratics
-    qa = np.concatenate((a[:, iu] - a[:, ju], a[:, iu] + a[:, ju], a), axis=1)
-    qb = np.concatenate((n[:, iu] - n[:, ju], n[:, iu] + n[:, ju], n), axis=1)
-    qc = np.concatenate((b[:, iu] - b[:, ju], b[:, iu] + b[:, ju], b), axis=1)
+    qa = np.concatenate((at[iu] - at[ju], at[iu] + at[ju], at))
+    qb = np.concatenate((nt[iu] - nt[ju], nt[iu] + nt[ju], nt))
+    qc = np.concatenate((bt[iu] - bt[ju], bt[iu] + bt[ju], bt))
     with np.errstate(divide="ignore", invalid="ignore"):
-        cand = np.concatenate((*_roots(qa, qb, qc), -n / (2.0 * a), zlo[:, None], zhi[:, None],
-                               np.zeros((b.shape[0], 1))), axis=1)
-    cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo[:, None], zhi[:, None])
-    z = cand[:, :, None]
-    d = np.abs(b[:, None, :] + (n[:, None, :] + a[:, None, :] * z) * z)   # (K, C, m)
-    worst = d.max(axis=2)
-    total = d.sum(axis=2)
-    best = worst.min(axis=1, keepdims=True)
-    total = np.where(worst <= best + _TIE, total, np.inf)
-    return cand[np.arange(b.shape[0]), np.argmin(total, axis=1)]
+        cand = np.concatenate((*_roots(qa, qb, qc), -nt / (2.0 * at), zlo[None], zhi[None],
+                               np.zeros((1, b.shape[0]))))                # (C, K)
+    cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo, zhi)
+    d = np.abs(bt[:, None, :] + (nt[:, None, :] + at[:, None, :] * cand) * cand)   # (m, C, K)
+    worst = functools.reduce(np.maximum, d)      # faster than reductions over a short axis 0
+    total = functools.reduce(np.add, d)
+    total = np.where(worst <= worst.min(axis=0) + _TIE, total, np.inf)
+    return cand[np.argmin(total, axis=0), np.arange(b.shape[0])]
 
 
 def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
@@ -83,7 +82,7 @@ class _Linearisation:
     def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
         p, u, jp, ju = obj.arm.tool_jacobian(obj.full(x))
         self.c = obj.residuals(p, u)
-        self.merit = obj.motion_time(x) * obj.omega + weight * np.linalg.norm(self.c, axis=1)
+        self.merit = obj.motion_time(x) * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
         jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
         self.u, s, self.vt = np.linalg.svd(jac, full_matrices=True)
         rank = min(jac.shape[1:])
@@ -118,7 +117,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     live = np.ones(k, dtype=bool)
     for _ in range(max_steps):
         step = here.newton(here.c)
-        size = np.linalg.norm(step, axis=1)
+        size = np.sqrt(np.einsum("km,km->k", step, step))
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
         for j in range(here.rank, m):
@@ -134,12 +133,12 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         trial = np.clip(base, lo, hi)
         trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)   # second-order correction
         there = _Linearisation(obj, trial, weight)
-        moved = np.max(np.abs(trial - x), axis=1)
+        moved = np.einsum("km,km->k", trial - x, trial - x)
         accept = live & (there.merit < here.merit)
         x[accept] = trial[accept]
         here.keep(there, accept)
         delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
-        live &= (moved > 1e-13) & (delta > 1e-13)
+        live &= (moved > 1e-26) & (delta > 1e-13)
         if not live.any():
             break
     return x
