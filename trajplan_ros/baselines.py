@@ -14,6 +14,8 @@ The paper does not give their settings; ours are the textbook ones:
 """
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from .objective import Objective
@@ -96,52 +98,58 @@ def spso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: flo
     return _swarm(obj, population, max_iter, tol, seed, constricted=True)
 
 
-def ga(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-       seed: int | np.random.Generator | None = None) -> OptimizeResult:
-    """Real-coded genetic algorithm with tournament selection, BLX-0.5 and Gaussian mutation."""
+def _generations(obj: Objective, population: int, max_iter: int, tol: float, seed,
+                 generation: Callable[[_Run, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+                 ) -> OptimizeResult:
+    """Run ``generation(run, x, f) -> (x, f)`` until the stopping rule or the iteration cap."""
     run = _Run(obj, population, max_iter, tol, seed)
-    lo, hi, rng = run.lo, run.hi, run.rng
-    dim = lo.size
-    x = initial_population(rng, lo, hi, (population,))
+    x = initial_population(run.rng, run.lo, run.hi, (population,))
     f = run.evaluate(x)
     for _ in range(max_iter):
-        pairs = rng.integers(0, population, (2, population))
-        parents = x[np.where(f[pairs[0]] < f[pairs[1]], pairs[0], pairs[1])]
-        mates = parents[rng.permutation(population)]
-        gap = np.abs(parents - mates)
-        low = np.minimum(parents, mates) - 0.5 * gap
-        child = low + rng.random(x.shape) * 2.0 * gap
-        child = np.where(rng.random((population, 1)) < 0.9, child, parents)
-        mutate = rng.random(x.shape) < 1.0 / dim
-        child = child + mutate * rng.normal(0.0, 0.1, x.shape) * (hi - lo)
-        x = np.clip(child, lo, hi)
-        x[0] = run.best_x                                   # elitism
-        f = run.evaluate(x)
+        x, f = generation(run, x, f)
         if run.step_done():
             return run.result(True)
     return run.result(False)
+
+
+def _ga_generation(run: _Run, x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rng, lo, hi = run.rng, run.lo, run.hi
+    population, dim = x.shape
+    pairs = rng.integers(0, population, (2, population))
+    parents = x[np.where(f[pairs[0]] < f[pairs[1]], pairs[0], pairs[1])]
+    mates = parents[rng.permutation(population)]
+    gap = np.abs(parents - mates)
+    child = np.minimum(parents, mates) - 0.5 * gap + rng.random(x.shape) * 2.0 * gap
+    child = np.where(rng.random((population, 1)) < 0.9, child, parents)
+    mutate = rng.random(x.shape) < 1.0 / dim
+    child = np.clip(child + mutate * rng.normal(0.0, 0.1, x.shape) * (hi - lo), lo, hi)
+    child[0] = run.best_x                                   # elitism
+    return child, run.evaluate(child)
+
+
+def _de_generation(run: _Run, x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rng = run.rng
+    population, dim = x.shape
+    idx = np.arange(population)
+    # three distinct partners per member, none equal to the member itself
+    r = np.argsort(rng.random((population, population - 1)), axis=1)[:, :3]
+    r = r + (r >= idx[:, None])
+    mutant = x[r[:, 0]] + 0.5 * (x[r[:, 1]] - x[r[:, 2]])
+    cross = rng.random(x.shape) < 0.9
+    cross[idx, rng.integers(0, dim, population)] = True
+    trial = np.clip(np.where(cross, mutant, x), run.lo, run.hi)
+    ft = run.evaluate(trial)
+    keep = ft < f
+    return np.where(keep[:, None], trial, x), np.where(keep, ft, f)
+
+
+def ga(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+       seed: int | np.random.Generator | None = None) -> OptimizeResult:
+    """Real-coded genetic algorithm with tournament selection, BLX-0.5 and Gaussian mutation."""
+    return _generations(obj, population, max_iter, tol, seed, _ga_generation)
 
 
 def de(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
        seed: int | np.random.Generator | None = None) -> OptimizeResult:
     """Differential evolution, DE/rand/1/bin with F = 0.5 and CR = 0.9."""
-    run = _Run(obj, population, max_iter, tol, seed)
-    lo, hi, rng = run.lo, run.hi, run.rng
-    dim = lo.size
-    x = initial_population(rng, lo, hi, (population,))
-    f = run.evaluate(x)
-    idx = np.arange(population)
-    for _ in range(max_iter):
-        # three distinct partners per member, none equal to the member itself
-        r = np.argsort(rng.random((population, population - 1)), axis=1)[:, :3]
-        r = r + (r >= idx[:, None])
-        mutant = x[r[:, 0]] + 0.5 * (x[r[:, 1]] - x[r[:, 2]])
-        cross = rng.random(x.shape) < 0.9
-        cross[idx, rng.integers(0, dim, population)] = True
-        trial = np.clip(np.where(cross, mutant, x), lo, hi)
-        ft = run.evaluate(trial)
-        keep = ft < f
-        x[keep], f[keep] = trial[keep], ft[keep]
-        if run.step_done():
-            return run.result(True)
-    return run.result(False)
+    return _generations(obj, population, max_iter, tol, seed, _de_generation)
