@@ -77,27 +77,45 @@ def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
 
 
 class _Linearisation:
-    """c(x), merit, and the SVD of the constraint Jacobian at K points."""
+    """c(x), the merit, a pseudo-inverse of the constraint Jacobian J and a basis of its null space.
+
+    The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
+    small matrix products, much cheaper than an SVD per step and well behaved near
+    singularities); with one null direction (the usual case) it is the largest column of the
+    projector I - J^+ J.
+    """
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
         p, u, jp, ju = obj.arm.tool_jacobian(obj.full(x))
         self.c = obj.residuals(p, u)
         self.merit = obj.motion_time(x) * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
         jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
-        self.u, s, self.vt = np.linalg.svd(jac, full_matrices=True)
-        rank = min(jac.shape[1:])
-        self.s_inv = np.where(s > 1e-9 * s[:, :1], 1.0 / np.where(s > 0, s, 1.0), 0.0)[:, :rank]
-        self.rank = rank
+        k, rows, dim = jac.shape
+        jt = np.swapaxes(jac, 1, 2)
+        gram = jac @ jt if rows <= dim else jt @ jac
+        size = gram.shape[1]
+        damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
+        inverse = np.linalg.inv(gram + damp * np.eye(size))
+        self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
+        free = dim - rows
+        if free <= 0:
+            self.null = np.empty((k, 0, dim))
+        else:
+            projector = np.eye(dim) - self.pinv @ jac
+            if free == 1:
+                col = np.argmax(np.einsum("kij,kij->kj", projector, projector), axis=1)
+                n = projector[np.arange(k), :, col]
+                self.null = (n / np.sqrt(np.einsum("ki,ki->k", n, n))[:, None])[:, None, :]
+            else:
+                self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
 
     def newton(self, res: np.ndarray) -> np.ndarray:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
-        r = self.rank
-        coef = (np.swapaxes(self.u[:, :, :r], 1, 2) @ res[:, :, None])[:, :, 0] * self.s_inv
-        return -(np.swapaxes(self.vt[:, :r, :], 1, 2) @ coef[:, :, None])[:, :, 0]
+        return -(self.pinv @ res[:, :, None])[:, :, 0]
 
     def keep(self, other: "_Linearisation", mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
-        for name in ("c", "merit", "u", "vt", "s_inv"):
+        for name in ("c", "merit", "pinv", "null"):
             mine, theirs = getattr(self, name), getattr(other, name)
             mine[mask] = theirs[mask]
 
@@ -107,7 +125,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     lo, hi = obj.lower, obj.upper
     start = obj.start[: obj.arm.planned]
     x = np.clip(np.array(x, dtype=float, ndmin=2), lo, hi)
-    k, m = x.shape
+    k = x.shape[0]
     # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
     # multiplier of this problem, so that the merit's minimum is the constrained one.
     weight = 1e3 / obj.arm.reach
@@ -120,14 +138,15 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         size = np.sqrt(np.einsum("km,km->k", step, step))
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
-        for j in range(here.rank, m):
-            direction = here.vt[:, j, :]
+        for j in range(here.null.shape[1]):
+            direction = here.null[:, j, :]
             half_curv = 0.5 * here.newton(2.0 * (_residuals(obj, x + probe * direction) - here.c)
                                           / probe ** 2)              # x''/2 along the direction
             safe = np.where(np.abs(direction) > 1e-15, direction, np.nan)
-            a_lo, a_hi = (lo - base) / safe, (hi - base) / safe
+            a_lo, a_hi = (lo - base) / safe, (hi - base) / safe      # the joint limits along z
             zlo = np.maximum(-delta, np.nanmax(np.fmin(a_lo, a_hi), axis=1, initial=-np.inf))
-            zhi = np.maximum(np.minimum(delta, np.nanmin(np.fmax(a_lo, a_hi), axis=1, initial=np.inf)), zlo)
+            zhi = np.minimum(delta, np.nanmin(np.fmax(a_lo, a_hi), axis=1, initial=np.inf))
+            zhi = np.maximum(zhi, zlo)
             z = _line_minimax(base - start, direction, half_curv, zlo, zhi)[:, None]
             base = base + (direction + half_curv * z) * z
         trial = np.clip(base, lo, hi)
