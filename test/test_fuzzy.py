@@ -90,3 +90,7 @@ def test_membership_functions_of_table2():
 def test_invalid_settings_are_refused(bad):
     with pytest.raises(ValueError):
         RewardPunishment(**bad)
+
+
+def test_empty_batches_are_fine():
+    assert S(np.empty(0), np.empty(0), ERR_MAX).shape == (0,)

@@ -133,7 +133,7 @@ class RewardPunishment:
         lam, tau = np.asarray(lam, dtype=float), np.asarray(tau, dtype=float)
         mu_col = gaussian(lam.ravel()[None, :], _CLOSENESS_CENTRES[:, None], self.sigma)   # (8, N)
         mu_row = gaussian(tau.ravel()[None, :], _ROW_CENTRES[:, None], 2 * self.sigma)     # (3, N)
-        weight = np.minimum(mu_row[:, None, :], mu_col[None, :, :]).reshape(-1, lam.size)  # (24, N)
+        weight = np.minimum(mu_row[:, None, :], mu_col[None, :, :]).reshape(_ONES.size, lam.size)
         return ((_SINGLETONS.ravel() @ weight) / (_ONES @ weight)).reshape(lam.shape)
 
     def punishment(self, lam: np.ndarray) -> np.ndarray:
