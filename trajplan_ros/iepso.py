@@ -40,8 +40,8 @@ __all__ = ["iepso"]
 
 
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-          seed: int | np.random.Generator | None = None, swarms: int = 8, polish: bool = True,
-          polish_period: int = 5, polish_count: int = 12, polish_steps: int = 8,
+          seed: int | np.random.Generator | None = None, swarms: int = 16, polish: bool = True,
+          polish_period: int = 5, polish_count: int = 6, polish_steps: int = 8,
           agreement: int = 4, patience_rounds: int = 4, restart: bool = True,
           elimination: float = 0.1, elimination_period: int = 5,
           inertia: tuple[float, float] = (0.9, 0.4), c1: float = 2.0, c2: float = 2.0,
