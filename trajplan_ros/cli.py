@@ -18,7 +18,7 @@ __all__ = ["main", "build_parser"]
 
 
 #: Modules that contribute subcommands (bench, figures, urdf, demo), in --help order.
-_SUBCOMMAND_MODULES: tuple[str, ...] = ()
+_SUBCOMMAND_MODULES: tuple[str, ...] = ("bench", "figures", "urdf", "demo")
 
 
 class UsageError(Exception):

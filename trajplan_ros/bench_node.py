@@ -1,0 +1,273 @@
+"""Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.bench_node``.
+
+The node runs as a child process (``demo.PlannerProcess``: a DDS domain of its own, localhost
+discovery) with its default parameters; this process is its client.
+
+1. Service overhead. ``--calls`` plan_trajectory calls, one after the other, on tool positions of
+   seeded random in-limit configurations. A call's overhead is its round trip measured here
+   minus the time of the plan itself, ``PlanResult.plan_time_s``, which the node logs for every
+   call ("planned in X ms"): so the overhead is everything the node adds around ``plan`` (DDS
+   both ways, executor and worker hand-over, trajectory and path messages, publishing). As a
+   cross-check that the logged figure is the plan's own cost, ``plan`` is also timed in this
+   process, before the node starts, on the same goals from the same starts (the node starts
+   each plan where the last trajectory ended). Target: median overhead at most 5 ms.
+2. Goal stream. ``--goals`` goals published on ``goal`` at ``--rate`` Hz while a parameter get
+   goes to the node every 10 ms. Targets: every goal is either planned or logged as dropped,
+   and every parameter get is answered within 100 ms, until the last goal is planned.
+
+Prints the figures; exits 0 when every target is met, 1 otherwise.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import statistics
+import sys
+import threading
+import time
+from typing import Any, Sequence
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import Point
+from nav_msgs.srv import GetPlan
+from rcl_interfaces.srv import GetParameters
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from .arm import paper_arm
+from .demo import PlannerProcess, ros_environment
+from .planner import plan
+
+__all__ = ["main"]
+
+#: The targets of issue 3.
+MAX_MEDIAN_OVERHEAD_S = 5e-3
+MAX_PARAMETER_LATENCY_S = 0.1
+#: Liveness bound for a single answer or for the stream to be accounted for.
+TIMEOUT_S = 120.0
+
+
+def _fmt(xyz: Sequence[float]) -> str:
+    """A point as the node writes it in its log lines."""
+    return "(" + ", ".join(f"{v:.6g}" for v in xyz) + ")"
+
+
+def _goals(count: int, seed: int) -> np.ndarray:
+    """Tool positions of seeded random configurations inside the paper arm's limits."""
+    arm = paper_arm()
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(arm.lower, arm.upper, size=(count, arm.n_joints))
+    q[:, arm.planned:] = 0.0
+    goals = np.round(arm.tool(q)[0], 5)                   # 5 decimals: unique 6-digit log text
+    if len({_fmt(g) for g in goals}) != count:
+        raise RuntimeError("goals collide in the node's log format; pick another --seed")
+    return goals
+
+
+def _pct(values: Sequence[float], q: float) -> float:
+    return float(np.percentile(values, q))
+
+
+def _ms(seconds: float) -> str:
+    return f"{1e3 * seconds:.2f} ms"
+
+
+class _Client:
+    """This process's ROS side: a node spun on a background thread, with blocking calls."""
+
+    def __init__(self) -> None:
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = Node("trajplan_bench", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+
+    def call(self, client: Any, request: Any) -> tuple[Any | None, float]:
+        """(answer or None on timeout, round trip in s)."""
+        done = threading.Event()
+        began = time.perf_counter()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        answered = done.wait(TIMEOUT_S)
+        return (future.result() if answered else None), time.perf_counter() - began
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.thread.join(timeout=TIMEOUT_S)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+def _in_process(goals: np.ndarray) -> list[float]:
+    """plan() times here, chaining starts as the node does."""
+    start, times = None, []
+    for goal in goals:
+        result = plan(goal, start, seed=0)
+        times.append(result.plan_time_s)
+        if result.success:
+            start = result.joint_goal
+    return times
+
+
+def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
+           idle: bool) -> tuple[list[float], list[float], int] | str:
+    """Call plan_trajectory on each goal in turn: (round trips, logged plan times, empty plans),
+    or the reason it failed. With ``idle``, each call waits until the node has logged the one
+    before, its last step (publishing and logging follow the answer)."""
+    trips, empty = [], 0
+    for i, goal in enumerate(goals):
+        request = GetPlan.Request()
+        request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
+        answer, trip = ros.call(client, request)
+        if answer is None:
+            return f"no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}"
+        trips.append(trip)
+        empty += not answer.plan.poses
+        if idle or i == len(goals) - 1:
+            node.wait_for(rf"service call #\d+ {re.escape(_fmt(goal))} m from ", timeout=TIMEOUT_S)
+    logged = {m.group(1): float(m.group(2)) / 1e3 for m in node.matches(
+        r"service call #\d+ (\([^)]*\)) m from .*; planned in ([0-9.]+) ms")}
+    return trips, [logged[_fmt(g)] for g in goals], empty
+
+
+def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
+                   more_goals: np.ndarray) -> tuple[bool, list[str]]:
+    client = ros.node.create_client(GetPlan, "plan_trajectory")
+    if not client.wait_for_service(timeout_sec=TIMEOUT_S):
+        return False, ["no plan_trajectory service"]
+    single = _calls(node, ros, client, goals, idle=True)
+    if isinstance(single, str):
+        return False, [single]
+    trips, plans, empty = single
+    overhead = [t - p for t, p in zip(trips, plans)]
+    met = statistics.median(overhead) <= MAX_MEDIAN_OVERHEAD_S
+    lines = [
+        f"service: {len(goals)} plan_trajectory calls, each to an idle node, {len(goals) - empty} "
+        f"with a plan, {empty} empty (goal not reached)",
+        f"  round trip (client)          median {_ms(statistics.median(trips))}, "
+        f"p90 {_ms(_pct(trips, 90))}",
+        f"  plan time (node, logged)     median {_ms(statistics.median(plans))}, "
+        f"p90 {_ms(_pct(plans, 90))}",
+        f"  overhead = round trip - plan median {_ms(statistics.median(overhead))}, "
+        f"p90 {_ms(_pct(overhead, 90))}, max {_ms(max(overhead))} "
+        f"(target: median <= {_ms(MAX_MEDIAN_OVERHEAD_S)}): {'met' if met else 'NOT MET'}",
+    ]
+    burst = _calls(node, ros, client, more_goals, idle=False)
+    if isinstance(burst, str):
+        return False, lines + [burst]
+    trips, plans, _ = burst
+    overhead = [t - p for t, p in zip(trips, plans)]
+    lines.append(
+        f"  back to back ({len(more_goals)} more calls, each sent when the last answer arrives, "
+        f"so it also waits while the node publishes and logs the last plan): overhead median "
+        f"{_ms(statistics.median(overhead))}, p90 {_ms(_pct(overhead, 90))}")
+    return met, lines
+
+
+def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
+                  rate: float) -> tuple[bool, list[str]]:
+    publisher = ros.node.create_publisher(Point, "goal", 10)
+    params = ros.node.create_client(GetParameters, "trajplan/get_parameters")
+    deadline = time.monotonic() + TIMEOUT_S
+    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+        threading.Event().wait(0.02)
+    if not params.wait_for_service(timeout_sec=TIMEOUT_S):
+        return False, ["no parameter service"]
+    wanted = {_fmt(g) for g in goals}
+    settled: dict[str, str] = {}
+    latencies: list[float] = []
+    stop = threading.Event()
+
+    def poll_parameters() -> None:
+        request = GetParameters.Request(names=["angular_velocity"])
+        while not stop.is_set():
+            answer, trip = ros.call(params, request)
+            latencies.append(trip if answer is not None else float("inf"))
+            stop.wait(0.01)
+
+    poller = threading.Thread(target=poll_parameters, daemon=True)
+    poller.start()
+    began = time.perf_counter()
+    for i, goal in enumerate(goals):
+        publisher.publish(Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2])))
+        time.sleep(max(0.0, began + (i + 1) / rate - time.perf_counter()))
+    sent = time.perf_counter() - began
+
+    def accounted() -> bool:
+        for m in node.matches(r"\]: goal #\d+ (\([^)]*\)) m from "):
+            settled.setdefault(m.group(1), "planned")
+        for m in node.matches(r"\]: dropped goal #\d+ (\([^)]*\)) m: "):
+            settled.setdefault(m.group(1), "dropped")
+        return wanted <= settled.keys()
+
+    deadline = time.monotonic() + TIMEOUT_S
+    while not accounted() and time.monotonic() < deadline:
+        threading.Event().wait(0.05)
+    stop.set()
+    poller.join(timeout=TIMEOUT_S)
+
+    planned = sum(1 for g in wanted if settled.get(g) == "planned")
+    dropped = sum(1 for g in wanted if settled.get(g) == "dropped")
+    missing = len(wanted) - planned - dropped
+    published = len([m for m in node.matches(r"\]: goal #\d+ (\([^)]*\)) m from .*; published")
+                     if m.group(1) in wanted])
+    worst = max(latencies)
+    all_met = missing == 0 and worst <= MAX_PARAMETER_LATENCY_S
+    lines = [
+        f"goal stream: {len(goals)} goals on goal at {rate:g} Hz (sent in {sent:.2f} s)",
+        f"  planned {planned} ({published} reached and published), dropped {dropped} (each "
+        f"logged), unaccounted {missing}: {'met' if missing == 0 else 'NOT MET'}",
+        f"  parameter get every 10 ms meanwhile: {len(latencies)} sent, "
+        f"{sum(np.isfinite(latencies))} answered, median "
+        f"{_ms(statistics.median(latencies))}, p99 {_ms(_pct(latencies, 99))}, max {_ms(worst)} "
+        f"(target: max <= {_ms(MAX_PARAMETER_LATENCY_S)}): "
+        f"{'met' if worst <= MAX_PARAMETER_LATENCY_S else 'NOT MET'}",
+    ]
+    return all_met, lines
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m trajplan_ros.bench_node",
+                                     description=__doc__.split("\n\n")[0])
+    parser.add_argument("--calls", type=int, default=100, help="service calls (default 100)")
+    parser.add_argument("--goals", type=int, default=200, help="streamed goals (default 200)")
+    parser.add_argument("--rate", type=float, default=100.0, help="goal rate, Hz (default 100)")
+    parser.add_argument("--seed", type=int, default=3, help="seed of the goals (default 3)")
+    args = parser.parse_args(argv)
+
+    call_goals = _goals(args.calls, args.seed)
+    burst_goals = _goals(args.calls, args.seed + 1)
+    stream_goals = _goals(args.goals, args.seed + 2)
+    here = _in_process(call_goals)
+    env = ros_environment()
+    os.environ.update(env)
+    print(f"planner_node benchmark: python -m trajplan_ros.bench_node "
+          f"{' '.join(argv if argv is not None else sys.argv[1:])}".rstrip())
+    print(f"machine: {platform.machine()}, {os.cpu_count()} CPUs, Python "
+          f"{platform.python_version()}, rmw {os.environ.get('RMW_IMPLEMENTATION', 'default')}")
+    node = PlannerProcess(env=env)
+    ros = _Client()
+    try:
+        met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
+        print("\n".join(service_lines[:4]))
+        print(f"  plan() in this process on the same goals from the same starts: median "
+              f"{_ms(statistics.median(here))}, p90 {_ms(_pct(here, 90))}")
+        print("\n".join(service_lines[4:]))
+        met_stream, stream_lines = _stream_phase(node, ros, stream_goals, args.rate)
+        print("\n".join(stream_lines))
+    finally:
+        ros.close()
+        code = node.stop()
+    if code != 0 or any("Traceback" in line for line in node.lines):
+        print(f"planner_node exited with {code}:\n" + "\n".join(node.lines[-20:]))
+        return 1
+    return 0 if met_service and met_stream else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
