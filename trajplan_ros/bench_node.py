@@ -3,17 +3,22 @@
 The node runs as a child process (``demo.PlannerProcess``: a DDS domain of its own, localhost
 discovery) with its default parameters; this process is its client.
 
-1. Service overhead. ``--calls`` plan_trajectory calls, one after the other, on tool positions of
-   seeded random in-limit configurations. A call's overhead is its round trip measured here
-   minus the time of the plan itself, ``PlanResult.plan_time_s``, which the node logs for every
-   call ("planned in X ms"): so the overhead is everything the node adds around ``plan`` (DDS
-   both ways, executor and worker hand-over, trajectory and path messages, publishing). As a
-   cross-check that the logged figure is the plan's own cost, ``plan`` is also timed in this
-   process, before the node starts, on the same goals from the same starts (the node starts
-   each plan where the last trajectory ended). Target: median overhead at most 5 ms.
+1. Service overhead. ``--calls`` plan_trajectory calls on tool positions of seeded random
+   in-limit configurations, each sent when the node is idle (it has logged the call before, its
+   last step). A call's overhead is its round trip measured here (request sent to response
+   callback) minus the time of the plan itself, ``PlanResult.plan_time_s``, which the node logs
+   for every plan ("planned in X ms"): everything around ``plan`` (DDS both ways, both
+   executors, the worker hand-over, the tool path message and this client's decoding of it).
+   The overhead grows with the path (one pose per trajectory point), so a least-squares line
+   over the pose count is printed too. As a cross-check that the logged figure is the plan's
+   own cost, ``plan`` is also timed in this process, before the node starts, on the same goals
+   from the same starts (the node starts each plan where the last trajectory ended). Then as
+   many calls back to back, each sent as soon as the last answer is in. Target: median
+   overhead (idle node) at most 5 ms.
 2. Goal stream. ``--goals`` goals published on ``goal`` at ``--rate`` Hz while a parameter get
-   goes to the node every 10 ms. Targets: every goal is either planned or logged as dropped,
-   and every parameter get is answered within 100 ms, until the last goal is planned.
+   goes to the node every 10 ms, after a warm-up that makes sure publisher and node have
+   matched. Targets: every goal is either planned or logged as dropped, and every parameter
+   get is answered within 100 ms, until every goal is accounted for.
 
 Prints the figures; exits 0 when every target is met, 1 otherwise.
 """
@@ -36,6 +41,7 @@ from nav_msgs.srv import GetPlan
 from rcl_interfaces.srv import GetParameters
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.utilities import get_rmw_implementation_identifier
 
 from .arm import paper_arm
 from .demo import PlannerProcess, ros_environment
@@ -88,13 +94,21 @@ class _Client:
         self.thread.start()
 
     def call(self, client: Any, request: Any) -> tuple[Any | None, float]:
-        """(answer or None on timeout, round trip in s)."""
+        """(answer or None on timeout, round trip in s): from sending the request to the
+        response callback, which runs in the executor thread as soon as the answer is in."""
         done = threading.Event()
+        arrived: list[float] = []
+
+        def on_answer(_: Any) -> None:
+            arrived.append(time.perf_counter())
+            done.set()
+
         began = time.perf_counter()
         future = client.call_async(request)
-        future.add_done_callback(lambda _: done.set())
-        answered = done.wait(TIMEOUT_S)
-        return (future.result() if answered else None), time.perf_counter() - began
+        future.add_done_callback(on_answer)
+        if not done.wait(TIMEOUT_S):
+            return None, time.perf_counter() - began
+        return future.result(), arrived[0] - began
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -115,11 +129,11 @@ def _in_process(goals: np.ndarray) -> list[float]:
 
 
 def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
-           idle: bool) -> tuple[list[float], list[float], int] | str:
-    """Call plan_trajectory on each goal in turn: (round trips, logged plan times, empty plans),
-    or the reason it failed. With ``idle``, each call waits until the node has logged the one
-    before, its last step (publishing and logging follow the answer)."""
-    trips, empty = [], 0
+           idle: bool) -> tuple[list[float], list[float], list[int]] | str:
+    """Call plan_trajectory on each goal in turn: (round trips, logged plan times, poses in
+    each answer), or the reason it failed. With ``idle``, each call waits until the node has
+    logged the one before, its last step (publishing and logging follow the answer)."""
+    trips, sizes = [], []
     for i, goal in enumerate(goals):
         request = GetPlan.Request()
         request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
@@ -127,12 +141,12 @@ def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
         if answer is None:
             return f"no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}"
         trips.append(trip)
-        empty += not answer.plan.poses
+        sizes.append(len(answer.plan.poses))
         if idle or i == len(goals) - 1:
             node.wait_for(rf"service call #\d+ {re.escape(_fmt(goal))} m from ", timeout=TIMEOUT_S)
     logged = {m.group(1): float(m.group(2)) / 1e3 for m in node.matches(
         r"service call #\d+ (\([^)]*\)) m from .*; planned in ([0-9.]+) ms")}
-    return trips, [logged[_fmt(g)] for g in goals], empty
+    return trips, [logged[_fmt(g)] for g in goals], sizes
 
 
 def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
@@ -143,12 +157,14 @@ def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     single = _calls(node, ros, client, goals, idle=True)
     if isinstance(single, str):
         return False, [single]
-    trips, plans, empty = single
-    overhead = [t - p for t, p in zip(trips, plans)]
+    trips, plans, sizes = single
+    overhead = np.subtract(trips, plans)
     met = statistics.median(overhead) <= MAX_MEDIAN_OVERHEAD_S
+    planned = np.flatnonzero(sizes)
+    per_pose, fixed = np.polyfit(np.take(sizes, planned), overhead[planned], 1)
     lines = [
-        f"service: {len(goals)} plan_trajectory calls, each to an idle node, {len(goals) - empty} "
-        f"with a plan, {empty} empty (goal not reached)",
+        f"service: {len(goals)} plan_trajectory calls, each to an idle node, {planned.size} "
+        f"with a plan, {len(goals) - planned.size} empty (goal not reached)",
         f"  round trip (client)          median {_ms(statistics.median(trips))}, "
         f"p90 {_ms(_pct(trips, 90))}",
         f"  plan time (node, logged)     median {_ms(statistics.median(plans))}, "
@@ -156,12 +172,15 @@ def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
         f"  overhead = round trip - plan median {_ms(statistics.median(overhead))}, "
         f"p90 {_ms(_pct(overhead, 90))}, max {_ms(max(overhead))} "
         f"(target: median <= {_ms(MAX_MEDIAN_OVERHEAD_S)}): {'met' if met else 'NOT MET'}",
+        f"  path: median {statistics.median(np.take(sizes, planned)):g} poses (range "
+        f"{min(np.take(sizes, planned))}..{max(sizes)}, one per sample period of motion); "
+        f"overhead ~ {_ms(fixed)} + {1e6 * per_pose:.1f} us per pose (least squares)",
     ]
     burst = _calls(node, ros, client, more_goals, idle=False)
     if isinstance(burst, str):
         return False, lines + [burst]
     trips, plans, _ = burst
-    overhead = [t - p for t, p in zip(trips, plans)]
+    overhead = np.subtract(trips, plans)
     lines.append(
         f"  back to back ({len(more_goals)} more calls, each sent when the last answer arrives, "
         f"so it also waits while the node publishes and logs the last plan): overhead median "
@@ -169,15 +188,28 @@ def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     return met, lines
 
 
+def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
+    """The goals (numbered from 1 in sending order) neither planned nor dropped, if any."""
+    lost = [f"#{i} {_fmt(g)}" for i, g in enumerate(goals, 1) if _fmt(g) not in settled]
+    return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ""
+
+
 def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
                   rate: float) -> tuple[bool, list[str]]:
-    publisher = ros.node.create_publisher(Point, "goal", 10)
+    # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
+    # when a shorter history is full
+    publisher = ros.node.create_publisher(Point, "goal", len(goals))
     params = ros.node.create_client(GetParameters, "trajplan/get_parameters")
-    deadline = time.monotonic() + TIMEOUT_S
-    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
-        threading.Event().wait(0.02)
     if not params.wait_for_service(timeout_sec=TIMEOUT_S):
         return False, ["no parameter service"]
+    # warm up: until the node has logged a goal from this publisher (refused at once), the two
+    # sides may not have matched each other yet, and a first sample could be lost
+    deadline = time.monotonic() + TIMEOUT_S
+    nan = float("nan")
+    while not node.matches(r"\]: goal #\d+ \(nan, nan, nan\) m from ") and time.monotonic() < deadline:
+        publisher.publish(Point(x=nan, y=nan, z=nan))
+        ros.call(params, GetParameters.Request(names=["angular_velocity"]))
+        threading.Event().wait(0.05)
     wanted = {_fmt(g) for g in goals}
     settled: dict[str, str] = {}
     latencies: list[float] = []
@@ -221,7 +253,8 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     lines = [
         f"goal stream: {len(goals)} goals on goal at {rate:g} Hz (sent in {sent:.2f} s)",
         f"  planned {planned} ({published} reached and published), dropped {dropped} (each "
-        f"logged), unaccounted {missing}: {'met' if missing == 0 else 'NOT MET'}",
+        f"logged), unaccounted {missing}{_missing(goals, settled)}: "
+        f"{'met' if missing == 0 else 'NOT MET'}",
         f"  parameter get every 10 ms meanwhile: {len(latencies)} sent, "
         f"{sum(np.isfinite(latencies))} answered, median "
         f"{_ms(statistics.median(latencies))}, p99 {_ms(_pct(latencies, 99))}, max {_ms(worst)} "
@@ -249,15 +282,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"planner_node benchmark: python -m trajplan_ros.bench_node "
           f"{' '.join(argv if argv is not None else sys.argv[1:])}".rstrip())
     print(f"machine: {platform.machine()}, {os.cpu_count()} CPUs, Python "
-          f"{platform.python_version()}, rmw {os.environ.get('RMW_IMPLEMENTATION', 'default')}")
+          f"{platform.python_version()}, {get_rmw_implementation_identifier()}")
     node = PlannerProcess(env=env)
     ros = _Client()
     try:
         met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
-        print("\n".join(service_lines[:4]))
+        print("\n".join(service_lines[:5]))
         print(f"  plan() in this process on the same goals from the same starts: median "
               f"{_ms(statistics.median(here))}, p90 {_ms(_pct(here, 90))}")
-        print("\n".join(service_lines[4:]))
+        print("\n".join(service_lines[5:]))
         met_stream, stream_lines = _stream_phase(node, ros, stream_goals, args.rate)
         print("\n".join(stream_lines))
     finally:

@@ -10,8 +10,10 @@ rclpy only when the demo runs, so ``trajplan`` works without ROS 2.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import os
+import queue
 import re
 import shutil
 import signal
@@ -135,10 +137,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     env = ros_environment()
     os.environ.update(env)                 # this process joins the node's DDS domain
-    try:
-        import rclpy  # noqa: F401 - fail early, before starting the node
-    except ImportError:
-        raise ValueError("the demo needs ROS 2's Python packages: pip install '.[ros]'") from None
+    if importlib.util.find_spec("rclpy") is None:
+        raise ValueError("the demo needs ROS 2's Python packages: pip install '.[ros]'")
     node = PlannerProcess(env=env)
     print(f"started {' '.join(node.proc.args)} (pid {node.pid}), "
           f"ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}, localhost discovery")
@@ -150,8 +150,6 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _talk(node: PlannerProcess, goal: tuple[float, float, float], timeout: float) -> int:
-    import queue
-
     import rclpy
     from nav_msgs.srv import GetPlan
     from rclpy.executors import SingleThreadedExecutor
@@ -184,8 +182,10 @@ def _talk(node: PlannerProcess, goal: tuple[float, float, float], timeout: float
         if not answered.wait(timeout):
             print(f"no answer within {timeout:.0f} s", file=sys.stderr)
             return 1
-        for m in node.matches(r"\]: (service call #1 .*)$"):
-            print(f"  node log: {m.group(1)}")
+        # the node answers first, then publishes the trajectory and logs the plan
+        logged = node.wait_for(r"\]: (service call #1 .*)$", timeout)
+        if logged:
+            print(f"node log: {logged.group(1)}")
         path = future.result().plan
         if not path.poses:
             print("empty plan: the goal was not reached (see the node log above)")

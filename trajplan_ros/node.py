@@ -62,6 +62,8 @@ EXECUTOR_THREADS = 8
 #: After answering a service call, how long the worker may wait (for nothing but the answer to
 #: go out) before it publishes the trajectory and logs, unless new work arrives first.
 ANSWER_GRACE_S = 5e-3
+#: PoseStamped messages the worker makes ahead while idle, for the next service answer's path.
+BLANK_POSES = 200
 #: Python's GIL switch interval in the node process (default 5 ms): how long an executor thread
 #: may wait for the GIL while the worker computes. Shorter keeps answers prompt during plans.
 SWITCH_INTERVAL_S = 5e-4
@@ -153,10 +155,14 @@ class _Mailbox:
         self._current: _Job | None = None
         self.closed = False
 
-    def put_call(self, job: _Job) -> None:
+    def put_call(self, job: _Job) -> bool:
+        """Queue a service call; False once closed (it will not be planned)."""
         with self._cond:
+            if self.closed:
+                return False
             self._calls.append(job)
             self._cond.notify()
+            return True
 
     def put_goal(self, job: _Job) -> _Job | None:
         """Queue a topic goal; return the waiting goal it replaces, if any."""
@@ -229,17 +235,20 @@ def trajectory_msg(traj: Trajectory) -> JointTrajectory:
     return msg
 
 
-def path_msg(arm: ArmModel, traj: Trajectory, header: Header) -> Path:
+def path_msg(arm: ArmModel, traj: Trajectory, header: Header,
+             blanks: list[PoseStamped] | None = None) -> Path:
     """The tool path of ``traj``: one pose per trajectory point, from forward kinematics.
 
-    The poses share ``header``; fields are filled in place (a message built from keyword
-    arguments builds each default sub-message too, which doubles the cost on this hot path).
+    The poses share ``header`` and are filled in place, taken from ``blanks`` (new
+    PoseStamped messages made in advance) while it lasts: building a message costs more than
+    filling it.
     """
     tool = arm.frames(traj.positions)[:, -1]
     quats = _quaternions(tool[:, :3, :3])
     poses = []
     for (px, py, pz), (qx, qy, qz, qw) in zip(tool[:, :3, 3].tolist(), quats.tolist()):
-        pose = PoseStamped(header=header)
+        pose = blanks.pop() if blanks else PoseStamped()
+        pose.header = header
         p, o = pose.pose.position, pose.pose.orientation
         p.x, p.y, p.z = px, py, pz
         o.x, o.y, o.z, o.w = qx, qy, qz, qw
@@ -264,9 +273,11 @@ class PlannerNode(Node):
         self._goal_ids = itertools.count(1)
         self._call_ids = itertools.count(1)
         self._mailbox = _Mailbox()
+        self._blanks: list[PoseStamped] = []     # worker thread only
 
         self._publisher = self.create_publisher(JointTrajectory, "joint_trajectory", 10)
-        self.create_subscription(Point, "goal", self._on_goal, 10)
+        # a deep queue: every goal must reach _on_goal to be planned or logged as dropped
+        self.create_subscription(Point, "goal", self._on_goal, 100)
         # best effort: matches joint_states publishers of either reliability
         self.create_subscription(JointState, "joint_states", self._on_joint_states,
                                  qos_profile_sensor_data)
@@ -366,8 +377,8 @@ class PlannerNode(Node):
         job = _Job(f"service call #{next(self._call_ids)}", (p.x, p.y, p.z),
                    tolerance=request.tolerance if request.tolerance > 0 else None,
                    done=threading.Event(), answered=threading.Event())
-        self._mailbox.put_call(job)
-        job.done.wait()
+        if self._mailbox.put_call(job):
+            job.done.wait()
         response.plan = job.path if job.path is not None else Path(
             header=self._header(self._settings.base_frame))
         job.answered.set()
@@ -385,7 +396,11 @@ class PlannerNode(Node):
         return np.array([known.get(n, q) for n, q in zip(settings.arm.joint_names, settings.start)])
 
     def _work(self) -> None:
-        while (job := self._mailbox.take()) is not None:
+        while True:
+            # make the next answer's poses while idle (a service answer waits on their making)
+            self._blanks.extend(PoseStamped() for _ in range(BLANK_POSES - len(self._blanks)))
+            if (job := self._mailbox.take()) is None:
+                return
             try:
                 self._plan(job)
             except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
@@ -414,11 +429,12 @@ class PlannerNode(Node):
         took = f"planned in {1e3 * result.plan_time_s:.3f} ms"
         if not result.success:
             self._answer(job)
-            self.get_logger().warn(f"{where}: {result.status.value}: {result.message}; {took}")
+            optimised = f"; {took}" if result.joint_goal is not None else ""
+            self.get_logger().warn(f"{where}: {result.status.value}: {result.message}{optimised}")
             return
         traj = result.trajectory(s.arm, s.sample_period)
         if job.done is not None:
-            self._answer(job, path_msg(s.arm, traj, self._header(s.base_frame)))
+            self._answer(job, path_msg(s.arm, traj, self._header(s.base_frame), self._blanks))
             # the executor thread still has to send the answer; publishing now would compete
             # with it for the interpreter lock, so give it a moment unless more work is waiting
             self._mailbox.wait_for_work(ANSWER_GRACE_S)
