@@ -25,6 +25,8 @@ from typing import Any, Callable, Iterator, Mapping
 
 import pytest
 
+from trajplan_ros.demo import PlannerProcess
+
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = "trajplan_ros"
 #: Liveness bound for anything the tests wait on (discovery, a plan, a build step).
@@ -88,28 +90,11 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
 
 # --- the node process ---------------------------------------------------------------------------
 
-class NodeProcess:
-    """A planner_node subprocess; its merged stdout and stderr are collected line by line."""
+class NodeProcess(PlannerProcess):
+    """A planner_node subprocess (``trajplan_ros.demo.PlannerProcess``) with test helpers."""
 
     def __init__(self, argv: list[str], env: Mapping[str, str]) -> None:
-        self.argv = argv
-        self.proc = subprocess.Popen(argv, env=dict(env), stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        self.lines: list[str] = []
-        self._eof = False
-        self._cond = threading.Condition()
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            with self._cond:
-                self.lines.append(line.rstrip("\n"))
-                self._cond.notify_all()
-        with self._cond:
-            self._eof = True
-            self._cond.notify_all()
+        super().__init__(env=env, argv=argv)
 
     @property
     def output(self) -> str:
@@ -128,37 +113,16 @@ class NodeProcess:
             return any(regex.search(line) for line in self.lines[after:])
 
     def wait_for(self, pattern: str, after: int = 0, timeout: float = LIVENESS_S) -> re.Match[str]:
-        """The first line at or after ``after`` that ``pattern`` (a regex) matches."""
-        regex = re.compile(pattern)
-        found: list[re.Match[str]] = []
-
-        def scan() -> bool:
-            for line in self.lines[after:]:
-                if m := regex.search(line):
-                    found.append(m)
-                    return True
-            return self._eof
-
-        with self._cond:
-            if not self._cond.wait_for(scan, timeout=timeout):
-                pytest.fail(f"no line matching {pattern!r} within {timeout:.0f} s; output:\n"
-                            + "\n".join(self.lines[-40:]))
-        if not found:
-            pytest.fail(f"node exited ({self.proc.returncode}) before a line matched "
-                        f"{pattern!r}; output:\n" + "\n".join(self.lines[-40:]))
-        return found[0]
+        """The first line at or after ``after`` that ``pattern`` (a regex) matches; else fail."""
+        found = super().wait_for(pattern, timeout, after)
+        if found is None:
+            state = "exited" if self.proc.poll() is not None else "still running"
+            pytest.fail(f"no line matching {pattern!r} within {timeout:.0f} s (node {state}); "
+                        "output:\n" + "\n".join(self.lines[-40:]))
+        return found
 
     def stop(self, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
-        """Signal the process by PID, kill it after ``timeout`` s; return its exit code."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(sig)
-            try:
-                self.proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._reader.join(timeout=timeout)
-        return self.proc.returncode
+        return super().stop(sig, timeout)
 
 
 @pytest.fixture(scope="session")

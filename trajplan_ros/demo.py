@@ -57,8 +57,11 @@ def ros_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
 class PlannerProcess:
     """``planner_node`` as a child process; its log lines are collected as they come."""
 
-    def __init__(self, ros_args: Sequence[str] = (), env: Mapping[str, str] | None = None) -> None:
-        argv = planner_command() + (["--ros-args", *ros_args] if ros_args else [])
+    def __init__(self, ros_args: Sequence[str] = (), env: Mapping[str, str] | None = None,
+                 argv: Sequence[str] | None = None) -> None:
+        """Run ``argv`` (default: ``planner_command()``) with ``--ros-args ros_args``."""
+        argv = list(argv or planner_command()) + (["--ros-args", *ros_args] if ros_args else [])
+        self.argv = argv
         self.proc = subprocess.Popen(argv, env=dict(env or ros_environment()),
                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                      stderr=subprocess.STDOUT, text=True)
@@ -101,10 +104,10 @@ class PlannerProcess:
         with self._cond:
             return [m for m in map(regex.search, self.lines) if m]
 
-    def stop(self, timeout: float = 5.0) -> int:
-        """SIGINT by PID, SIGKILL after ``timeout`` s; the exit code."""
+    def stop(self, sig: int = signal.SIGINT, timeout: float = 5.0) -> int:
+        """``sig`` (SIGINT) by PID, SIGKILL after ``timeout`` s; the exit code."""
         if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
+            self.proc.send_signal(sig)
             try:
                 self.proc.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
