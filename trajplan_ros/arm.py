@@ -107,39 +107,66 @@ class ArmModel:
         q = np.asarray(q, dtype=float)
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
 
-    def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints)."""
-        w, z = self._chain(np.asarray(q, dtype=float), jacobian=False)
+    def held_tail(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The tool point and axis in frame ``planned`` with the held joints at q (n_joints,).
+
+        Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
+        """
+        q = np.asarray(q, dtype=float)[None, :]
+        start = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
+        w, z = self._chain(q, self.n_joints, self.planned, start, jacobian=False)
+        return w[:, 0], z[:, 0]
+
+    def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
+
+        With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
+        """
+        w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=False)
         return (np.stack((w[0].real, w[0].imag, z[0]), axis=1),
                 np.stack((w[1].real, w[1].imag, z[1]), axis=1))
 
-    def tool_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def tool_jacobian(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Tool position p, axis u (N, 3) and their derivatives Jp, Ju (N, 3, planned).
 
         For revolute joint i, dp/dq_i = sign_i z_{i-1} x (p - o_{i-1}) and du/dq_i = sign_i z_{i-1} x u.
+        ``tail`` as for ``tool``.
         """
-        w, z = self._chain(np.asarray(q, dtype=float), jacobian=True)
+        w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
         vec = np.stack((w.real, w.imag, z), axis=-1)               # (2 + 2 planned, N, 3)
         jac = np.moveaxis(vec[2:].reshape(self.planned, 2, -1, 3), 0, -1)   # (2, N, 3, planned)
         return vec[0], vec[1], jac[0], jac[1]
 
-    def _chain(self, q: np.ndarray, jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Walk the chain from the tool to the base (the hot path of every optimiser).
+    def _walk(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None,
+              jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
+        if tail is None:
+            tail = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
+            return self._chain(q, self.n_joints, 0, tail, jacobian)
+        return self._chain(q, self.planned, 0, tail, jacobian)
 
-        Returns w = x + i y (complex) and z, each (rows, N): row 0 is the tool point, row 1 the
-        tool axis and, with ``jacobian``, rows 2 + 2i and 3 + 2i are d(point)/dq_i and
-        d(axis)/dq_i for each planned joint i. Per joint it applies
+    def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],
+               jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Walk joints top-1 .. bottom from frame ``top`` towards the base (every optimiser's hot path).
+
+        ``tail`` is the tool point and axis in frame ``top`` as (w, z) with w = x + i y
+        (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool
+        point, row 1 the tool axis and, with ``jacobian``, rows 2 + 2i and 3 + 2i are
+        d(point)/dq_i and d(axis)/dq_i for each planned joint i. Per joint it applies
         v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the translation
         only to the point), the rotation about z as one complex product, so the cost is a few
         array operations per joint whatever N is. The derivative rows for joint i are born in
         frame i-1 as z x v (i v in complex form) and then rotated with everything else.
+        q: (N, top) joint angles; columns bottom..top-1 are used.
         """
-        rot = np.exp(1j * (q * self.sign + self.offset)).T          # (n_joints, N)
+        rot = np.exp(1j * (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top])).T
         rows = 2 + 2 * self.planned if jacobian else 2
         w = np.zeros((rows, q.shape[0]), dtype=complex)
         z = np.zeros((rows, q.shape[0]))
-        z[1] = 1.0
-        for i in range(self.n_joints - 1, -1, -1):
+        w[:2] = tail[0][:, None]
+        z[:2] = tail[1][:, None]
+        for i in range(top - 1, bottom - 1, -1):
             ca, sa = self._cos_alpha[i], self._sin_alpha[i]
             if sa != 0.0 or ca != 1.0:
                 y = w.imag
@@ -147,7 +174,7 @@ class ArmModel:
                 z = sa * y + ca * z
             w[0] += self.a[i]
             z[0] += self.d[i]
-            w *= rot[i]
+            w *= rot[i - bottom]
             if jacobian and i < self.planned:
                 w[2 + 2 * i: 4 + 2 * i] = (1j * self.sign[i]) * w[:2]
         return w, z

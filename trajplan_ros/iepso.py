@@ -39,6 +39,14 @@ from .polish import polish as polish_candidates
 __all__ = ["iepso"]
 
 
+def _agreeing(motion_time: np.ndarray, error: np.ndarray, eps: float) -> int:
+    """How many candidates reach the goal (error <= eps) within 1e-6 of the best such motion time."""
+    reached = error <= eps
+    if not reached.any():
+        return 0
+    return int(np.count_nonzero(reached & (motion_time <= motion_time[reached].min() * (1 + 1e-6))))
+
+
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
           seed: int | np.random.Generator | None = None, swarms: int = 16, polish: bool = True,
           polish_period: int = 5, polish_count: int = 6, polish_steps: int = 8,
@@ -75,6 +83,17 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     stable_rounds = 0
     converged = stop = False
 
+    near = obj.arm.reach / 8
+
+    def enough(candidates: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
+        # polish early stop: agreement, and no candidate still converging (near the goal and not
+        # stalled) is faster than the agreed one
+        r = obj.motion_time(candidates)
+        if _agreeing(r, error, obj.shaping.eps) < agreement:
+            return False
+        reached = error <= obj.shaping.eps
+        return not np.any(active & ~reached & (error < near) & (r < r[reached].min()))
+
     for it in range(max_iter):
         frac = it / max(max_iter - 1, 1)
         w = inertia[0] + (inertia[1] - inertia[0]) * frac
@@ -106,7 +125,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             # candidates: each swarm's best, and random members for diversity
             top = np.concatenate((g_idx[:, None], rng.integers(0, p, (s, polish_count - 1))), axis=1)
             refined = polish_candidates(obj, pbest[rows[:, None], top].reshape(-1, dim),
-                                        max_steps=polish_steps)
+                                        max_steps=polish_steps, enough=enough)
             rev = obj(refined)
             rf = rev.efficiency.reshape(s, -1)
             pick = np.argmin(rf, axis=1)
@@ -124,9 +143,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             best_err = pbest_err[rows, g_idx][np.argmin(swarm_best)]
             # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement
             # is judged on the motion time of the candidates that reach the goal
-            best_r = rev.motion_time[np.argmin(rev.efficiency)]
-            agree = np.count_nonzero((rev.error <= obj.shaping.eps)
-                                     & (rev.motion_time <= best_r * (1 + 1e-6)))
+            agree = _agreeing(rev.motion_time, rev.error, obj.shaping.eps)
             stable_rounds = stable_rounds + 1 if last_polished - best < tol else 0
             last_polished = best
             reached = best_err <= obj.shaping.eps

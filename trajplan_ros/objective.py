@@ -69,6 +69,7 @@ class Objective:
         self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
         self.axis_target = float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial else 0.0
         self.n_constraints = 4 if self.radial else 3
+        self._tail = arm.held_tail(self.start)
 
     @property
     def radial(self) -> bool:
@@ -109,6 +110,14 @@ class Objective:
         q[:, : self.arm.planned] = x
         return q
 
+    def tool(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tool position and axis (N, 3) for planned-joint vectors x (N, planned), the rest held."""
+        return self.arm.tool(x, tail=self._tail)
+
+    def tool_jacobian(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned), the rest held."""
+        return self.arm.tool_jacobian(x, tail=self._tail)
+
     def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Constraint residuals (N, 3) or (N, 4): p - goal, and u_z - cos eps in radial mode."""
         r = p - self.goal
@@ -118,10 +127,13 @@ class Objective:
 
     def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Eq. (11), extended by the axis residual in radial mode (see module docstring)."""
-        pos = p - self.goal
-        sq = np.einsum("ij,ij->i", pos, pos)
+        return self.residual_norm(self.residuals(p, u))
+
+    def residual_norm(self, r: np.ndarray) -> np.ndarray:
+        """The error (m) of residuals r (N, 3 or 4): the axis residual is scaled by the reach."""
+        sq = np.einsum("ij,ij->i", r[:, :3], r[:, :3])
         if self.radial:
-            sq = sq + (self.arm.reach * (u[:, 2] - self.axis_target)) ** 2
+            sq = sq + (self.arm.reach * r[:, 3]) ** 2
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
@@ -133,7 +145,7 @@ class Objective:
     def __call__(self, x: np.ndarray) -> Evaluation:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""
         x = np.atleast_2d(x)
-        p, u = self.arm.tool(self.full(x))
+        p, u = self.tool(x)
         err = self.errors(p, u)
         r = self.motion_time(x)
         f = r + self.shaping(err, r / self.longest_time, self.err_max)

@@ -22,6 +22,7 @@ A trust radius, a second-order correction and the merit R + W |c| make the steps
 from __future__ import annotations
 
 import functools
+from typing import Callable
 
 import numpy as np
 
@@ -72,8 +73,7 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
 
 
 def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
-    p, u = obj.arm.tool(obj.full(x))
-    return obj.residuals(p, u)
+    return obj.residuals(*obj.tool(x))
 
 
 class _Linearisation:
@@ -86,7 +86,7 @@ class _Linearisation:
     """
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
-        p, u, jp, ju = obj.arm.tool_jacobian(obj.full(x))
+        p, u, jp, ju = obj.tool_jacobian(x)
         self.c = obj.residuals(p, u)
         self.merit = obj.motion_time(x) * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
         jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
@@ -120,8 +120,15 @@ class _Linearisation:
             mine[mask] = theirs[mask]
 
 
-def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5) -> np.ndarray:
-    """Refine candidates x (K, planned) towards reached, least-motion-time joint goals."""
+def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
+           enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None
+           ) -> np.ndarray:
+    """Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
+
+    ``enough(x, error, active)``, if given, is asked after every step and ends the polish early
+    when it returns True (error: each candidate's constraint error, m; active: the candidates
+    whose steps are still being accepted, not stalled by repeated rejections).
+    """
     lo, hi = obj.lower, obj.upper
     start = obj.start[: obj.arm.planned]
     x = np.clip(np.array(x, dtype=float, ndmin=2), lo, hi)
@@ -158,6 +165,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         here.keep(there, accept)
         delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
         live &= (moved > 1e-26) & (delta > 1e-13)
-        if not live.any():
+        if not live.any() or (enough is not None
+                              and enough(x, obj.residual_norm(here.c), delta >= trust / 5)):
             break
     return x
