@@ -41,8 +41,10 @@ def test_jacobian_matches_finite_differences(n):
     rng = np.random.default_rng(10 + n)
     arm = paper_arm() if n == 5 else random_arm(rng, n)
     q = rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
-    p, u, jp, ju = arm.tool_jacobian(q)
+    d = arm.tool_jacobian(q)
+    p, jp, ju = d.p, d.jp, d.ju
     np.testing.assert_allclose(p, arm.tool(q)[0], atol=1e-15)
+    np.testing.assert_allclose(d.u, arm.tool(q)[1], atol=1e-15)
     h = 1e-6
     for i in range(arm.planned):
         dq = np.zeros(arm.n_joints)
@@ -50,6 +52,20 @@ def test_jacobian_matches_finite_differences(n):
         (pp, up), (pm, um) = arm.tool(q + dq), arm.tool(q - dq)
         np.testing.assert_allclose(jp[:, :, i], (pp - pm) / (2 * h), atol=1e-8)
         np.testing.assert_allclose(ju[:, :, i], (up - um) / (2 * h), atol=1e-8)
+
+
+@pytest.mark.parametrize("n", [3, 5, 7])
+def test_curvature_matches_finite_differences(n):
+    rng = np.random.default_rng(20 + n)
+    arm = paper_arm() if n == 5 else random_arm(rng, n)
+    q = rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
+    direction = np.zeros_like(q)
+    direction[:, : arm.planned] = rng.normal(size=(20, arm.planned))
+    pdd, udd = arm.tool_jacobian(q).curvature(direction[:, : arm.planned])
+    h = 1e-4
+    (pp, up), (p0, u0), (pm, um) = (arm.tool(q + t * direction) for t in (h, 0.0, -h))
+    np.testing.assert_allclose(pdd, (pp - 2 * p0 + pm) / h ** 2, atol=1e-6)
+    np.testing.assert_allclose(udd, (up - 2 * u0 + um) / h ** 2, atol=1e-6)
 
 
 def test_reach_bounds_every_tool_position():

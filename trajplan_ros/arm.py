@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["ArmModel", "InvalidArmModel", "paper_arm"]
+__all__ = ["ArmModel", "InvalidArmModel", "ToolJacobian", "paper_arm"]
 
 
 class InvalidArmModel(ValueError):
@@ -28,6 +28,63 @@ def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise InvalidArmModel(f"{name} has a non-finite value: {arr.tolist()}")
     return arr
+
+
+@dataclass(frozen=True, eq=False)
+class ToolJacobian:
+    """Tool position p and axis u with, per planned joint i, the derivatives
+    dp/dq_i = Z_i x (p - o_i) and du/dq_i = Z_i x u and the signed joint axis Z_i (axis of
+    joint i times its sign), all in the base frame.
+
+    ``tool`` is (3, 2, N): x, y, z of p and u. ``columns`` is (3, planned, 3, N): x, y, z of
+    [i, 0] = dp/dq_i, [i, 1] = du/dq_i and [i, 2] = Z_i (coordinates first, for fast arithmetic).
+    """
+
+    tool: np.ndarray
+    columns: np.ndarray
+
+    @property
+    def p(self) -> np.ndarray:
+        """Tool position, (N, 3)."""
+        return self.tool[:, 0].T
+
+    @property
+    def u(self) -> np.ndarray:
+        """Tool axis, (N, 3)."""
+        return self.tool[:, 1].T
+
+    @property
+    def jp(self) -> np.ndarray:
+        """dp/dq, (N, 3, planned)."""
+        return self.columns[:, :, 0].transpose(2, 0, 1)
+
+    @property
+    def ju(self) -> np.ndarray:
+        """du/dq, (N, 3, planned)."""
+        return self.columns[:, :, 1].transpose(2, 0, 1)
+
+    def curvature(self, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Second derivatives of p and u along joint directions n (N, planned): d2/dt2 at t = 0
+        of p(q + t n) and u(q + t n), each (N, 3).
+
+        The derivative of column i with respect to q_j, for j <= i (j nearer the base), is
+        Z_j x J_i, so the sum over all pairs is sum_j n_j Z_j x (2 T_j - n_j J_j) with
+        T_j = sum_{i >= j} n_i J_i.
+        """
+        weight = n.T[:, None, :]                                        # (planned, 1, N)
+        turned = self.columns[:, :, 2:] * weight                        # n_j Z_j, (3, planned, 1, N)
+        # regrouped by column i: sum_i n_i (2 W_i - n_i Z_i) x J_i with W_i = sum_{j <= i} n_j Z_j
+        a = 2.0 * turned
+        for i in range(1, a.shape[1]):                                  # running sum: W_i
+            a[:, i] += a[:, i - 1]
+        a -= turned
+        jac = self.columns[:, :, :2]
+        cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]          # coordinates first
+        second = np.einsum("cikn,in->ckn", cross, n.T)                 # (3, 2, N)
+        return second[:, 0].T, second[:, 1].T
+
+
+_NEXT, _LAST = [1, 2, 0], [2, 0, 1]      # (a x b)_c = a_{c+1} b_{c+2} - a_{c+2} b_{c+1}
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,20 +181,18 @@ class ArmModel:
         With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
         """
         w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=False)
-        return (np.stack((w[0].real, w[0].imag, z[0]), axis=1),
-                np.stack((w[1].real, w[1].imag, z[1]), axis=1))
+        vec = np.stack((w.real, w.imag, z), axis=-1)               # (2, N, 3)
+        return vec[0], vec[1]
 
     def tool_jacobian(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Tool position p, axis u (N, 3) and their derivatives Jp, Ju (N, 3, planned).
+                      ) -> ToolJacobian:
+        """Tool position and axis, their first derivatives and the joint axes; see ``ToolJacobian``.
 
-        For revolute joint i, dp/dq_i = sign_i z_{i-1} x (p - o_{i-1}) and du/dq_i = sign_i z_{i-1} x u.
         ``tail`` as for ``tool``.
         """
         w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
-        vec = np.stack((w.real, w.imag, z), axis=-1)               # (2 + 2 planned, N, 3)
-        jac = np.moveaxis(vec[2:].reshape(self.planned, 2, -1, 3), 0, -1)   # (2, N, 3, planned)
-        return vec[0], vec[1], jac[0], jac[1]
+        vec = np.stack((w.real, w.imag, z))                         # (3, 2 + 3 planned, N)
+        return ToolJacobian(vec[:, :2], vec[:, 2:].reshape(3, self.planned, 3, -1))
 
     def _walk(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None,
               jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -152,16 +207,20 @@ class ArmModel:
 
         ``tail`` is the tool point and axis in frame ``top`` as (w, z) with w = x + i y
         (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool
-        point, row 1 the tool axis and, with ``jacobian``, rows 2 + 2i and 3 + 2i are
-        d(point)/dq_i and d(axis)/dq_i for each planned joint i. Per joint it applies
+        point, row 1 the tool axis and, with ``jacobian``, rows 2 + 3i, 3 + 3i and 4 + 3i are
+        d(point)/dq_i, d(axis)/dq_i and sign_i times the axis of joint i, for each planned
+        joint i. Per joint it applies
         v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the translation
         only to the point), the rotation about z as one complex product, so the cost is a few
-        array operations per joint whatever N is. The derivative rows for joint i are born in
-        frame i-1 as z x v (i v in complex form) and then rotated with everything else.
+        array operations per joint whatever N is. The rows for joint i are born in its own
+        frame as z x v (i v in complex form) and z, then rotated with everything else.
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
-        rot = np.exp(1j * (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top])).T
-        rows = 2 + 2 * self.planned if jacobian else 2
+        theta = (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top]).T
+        rot = np.empty(theta.shape, dtype=complex)       # e^(i theta): cos and sin beat complex exp
+        np.cos(theta, out=rot.real)
+        np.sin(theta, out=rot.imag)
+        rows = 2 + 3 * self.planned if jacobian else 2
         w = np.zeros((rows, q.shape[0]), dtype=complex)
         z = np.zeros((rows, q.shape[0]))
         w[:2] = tail[0][:, None]
@@ -169,14 +228,15 @@ class ArmModel:
         for i in range(top - 1, bottom - 1, -1):
             ca, sa = self._cos_alpha[i], self._sin_alpha[i]
             if sa != 0.0 or ca != 1.0:
-                y = w.imag
-                w = w.real + 1j * (ca * y - sa * z)
+                y = w.imag.copy()
+                w.imag = ca * y - sa * z
                 z = sa * y + ca * z
             w[0] += self.a[i]
             z[0] += self.d[i]
             w *= rot[i - bottom]
             if jacobian and i < self.planned:
-                w[2 + 2 * i: 4 + 2 * i] = (1j * self.sign[i]) * w[:2]
+                w[2 + 3 * i: 4 + 3 * i] = (1j * self.sign[i]) * w[:2]
+                z[4 + 3 * i] = self.sign[i]
         return w, z
 
     def frames(self, q: np.ndarray) -> np.ndarray:

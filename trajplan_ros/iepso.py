@@ -85,10 +85,9 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
 
     near = obj.arm.reach / 8
 
-    def enough(candidates: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
+    def enough(r: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
         # polish early stop: agreement, and no candidate still converging (near the goal and not
         # stalled) is faster than the agreed one
-        r = obj.motion_time(candidates)
         if _agreeing(r, error, obj.shaping.eps) < agreement:
             return False
         reached = error <= obj.shaping.eps

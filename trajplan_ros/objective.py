@@ -19,7 +19,7 @@ from enum import Enum
 
 import numpy as np
 
-from .arm import ArmModel
+from .arm import ArmModel, ToolJacobian
 from .fuzzy import RewardPunishment
 
 __all__ = ["Mode", "Objective", "Evaluation", "InvalidRequest"]
@@ -114,7 +114,7 @@ class Objective:
         """Tool position and axis (N, 3) for planned-joint vectors x (N, planned), the rest held."""
         return self.arm.tool(x, tail=self._tail)
 
-    def tool_jacobian(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def tool_jacobian(self, x: np.ndarray) -> ToolJacobian:
         """``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned), the rest held."""
         return self.arm.tool_jacobian(x, tail=self._tail)
 
@@ -137,10 +137,10 @@ class Objective:
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
-        """Eq. (10): R = max_i |x_i - start_i| / omega."""
+        """Eq. (10): R = max_i |x_i - start_i| / omega, for x (N, planned)."""
         moved = np.abs(x - self.start[: self.arm.planned])
-        # a fold over the few joints is several times faster than np.max(..., axis=-1)
-        return functools.reduce(np.maximum, np.moveaxis(moved, -1, 0)) / self.omega
+        # a fold over the few joints is several times faster than np.max(..., axis=1)
+        return functools.reduce(np.maximum, moved.T) / self.omega
 
     def __call__(self, x: np.ndarray) -> Evaluation:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""

@@ -9,7 +9,7 @@ It solves
 vectorised over K candidates, by sequential quadratic-model steps. Each step linearises c and
 takes the minimum-norm Newton correction -J^+ c; then it moves along the null space of J (the
 directions that keep the goal reached). Along a null direction n the solutions curve away from
-the straight line; one extra forward-kinematics call gives that curvature
+the straight line; the exact second derivative of the kinematics gives that curvature
 (x'' = -J^+ d2c/dz2), so each joint's displacement is modelled as a parabola in the step z.
 The motion time, the largest of those |parabolas|, is minimised over z exactly by checking every
 candidate point (vertices of the max, stationary points, zeros, bounds). That converges fast
@@ -72,12 +72,25 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
     return cand[np.argmin(total, axis=0), np.arange(b.shape[0])]
 
 
+def _inverse(m: np.ndarray) -> np.ndarray:
+    """Inverses of symmetric matrices (K, s, s): the adjugate formula for s = 3 (the position
+    constraints; several times cheaper than LAPACK on small batches), np.linalg.inv otherwise."""
+    if m.shape[1] != 3:
+        return np.linalg.inv(m)
+    a, b, c, _, d, e, _, _, f = m.reshape(-1, 9).T
+    cof = (d * f - e * e, c * e - b * f, b * e - c * d, a * f - c * c, b * c - a * e, a * d - b * b)
+    inv_det = 1.0 / (a * cof[0] + b * cof[1] + c * cof[2])
+    return (np.array([cof[i] for i in (0, 1, 2, 1, 3, 4, 2, 4, 5)]) * inv_det).T.reshape(-1, 3, 3)
+
+
 def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
     return obj.residuals(*obj.tool(x))
 
 
 class _Linearisation:
-    """c(x), the merit, a pseudo-inverse of the constraint Jacobian J and a basis of its null space.
+    """c(x), the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null space
+    and, along each null direction n, half the curvature of the solution set: x''/2 = -J^+ c''/2,
+    with c'' the exact second derivative of c along n (``ToolJacobian.curvature``).
 
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
@@ -86,16 +99,18 @@ class _Linearisation:
     """
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
-        p, u, jp, ju = obj.tool_jacobian(x)
-        self.c = obj.residuals(p, u)
-        self.merit = obj.motion_time(x) * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
-        jac = np.concatenate((jp, ju[:, 2:3]), axis=1) if obj.radial else jp
+        d = obj.tool_jacobian(x)
+        self.c = obj.residuals(d.p, d.u)
+        self.time = obj.motion_time(x)
+        self.error = obj.residual_norm(self.c)
+        self.merit = self.time * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
+        jac = np.concatenate((d.jp, d.ju[:, 2:3]), axis=1) if obj.radial else d.jp
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)
         gram = jac @ jt if rows <= dim else jt @ jac
         size = gram.shape[1]
         damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
-        inverse = np.linalg.inv(gram + damp * np.eye(size))
+        inverse = _inverse(gram + damp * np.eye(size))
         self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
         free = dim - rows
         if free <= 0:
@@ -108,6 +123,11 @@ class _Linearisation:
                 self.null = (n / np.sqrt(np.einsum("ki,ki->k", n, n))[:, None])[:, None, :]
             else:
                 self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
+        self.half_curv = np.empty_like(self.null)
+        for j in range(self.null.shape[1]):
+            p2, u2 = d.curvature(self.null[:, j, :])
+            c2 = np.concatenate((p2, u2[:, 2:3]), axis=1) if obj.radial else p2
+            self.half_curv[:, j, :] = 0.5 * self.newton(c2)
 
     def newton(self, res: np.ndarray) -> np.ndarray:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
@@ -115,7 +135,7 @@ class _Linearisation:
 
     def keep(self, other: "_Linearisation", mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
-        for name in ("c", "merit", "pinv", "null"):
+        for name in ("c", "time", "error", "merit", "pinv", "null", "half_curv"):
             mine, theirs = getattr(self, name), getattr(other, name)
             mine[mask] = theirs[mask]
 
@@ -125,9 +145,9 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
            ) -> np.ndarray:
     """Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
-    ``enough(x, error, active)``, if given, is asked after every step and ends the polish early
-    when it returns True (error: each candidate's constraint error, m; active: the candidates
-    whose steps are still being accepted, not stalled by repeated rejections).
+    ``enough(time, error, active)``, if given, is asked after every step and ends the polish
+    early when it returns True (each candidate's motion time, s, and constraint error, m, and
+    whether its steps are still being accepted, not stalled by repeated rejections).
     """
     lo, hi = obj.lower, obj.upper
     start = obj.start[: obj.arm.planned]
@@ -136,7 +156,6 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
     # multiplier of this problem, so that the merit's minimum is the constrained one.
     weight = 1e3 / obj.arm.reach
-    probe = 1e-4                              # rad, finite-difference step for the curvature
     here = _Linearisation(obj, x, weight)
     delta = np.full(k, trust)
     live = np.ones(k, dtype=bool)
@@ -146,13 +165,12 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
         for j in range(here.null.shape[1]):
-            direction = here.null[:, j, :]
-            half_curv = 0.5 * here.newton(2.0 * (_residuals(obj, x + probe * direction) - here.c)
-                                          / probe ** 2)              # x''/2 along the direction
-            safe = np.where(np.abs(direction) > 1e-15, direction, np.nan)
-            a_lo, a_hi = (lo - base) / safe, (hi - base) / safe      # the joint limits along z
-            zlo = np.maximum(-delta, np.nanmax(np.fmin(a_lo, a_hi), axis=1, initial=-np.inf))
-            zhi = np.minimum(delta, np.nanmin(np.fmax(a_lo, a_hi), axis=1, initial=np.inf))
+            direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
+            with np.errstate(divide="ignore", invalid="ignore"):       # the joint limits along z
+                a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
+            moving = np.abs(direction) > 1e-15
+            zlo = functools.reduce(np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -delta)
+            zhi = functools.reduce(np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, delta)
             zhi = np.maximum(zhi, zlo)
             z = _line_minimax(base - start, direction, half_curv, zlo, zhi)[:, None]
             base = base + (direction + half_curv * z) * z
@@ -166,6 +184,6 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
         live &= (moved > 1e-26) & (delta > 1e-13)
         if not live.any() or (enough is not None
-                              and enough(x, obj.residual_norm(here.c), delta >= trust / 5)):
+                              and enough(here.time, here.error, delta >= trust / 5)):
             break
     return x
