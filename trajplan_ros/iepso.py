@@ -13,8 +13,8 @@ particles drawn inside the joint limits.
 
 Additions of ours, documented in the README, each on by default because it measurably helps:
 
-* several independent swarms advance in one array (``swarms``), so the vectorised cost of an
-  iteration barely grows;
+* several independent swarms advance in one array (``swarms``: 16, or 24 in radial mode), so
+  the vectorised cost of an iteration barely grows;
 * a memetic polish: every ``polish_period`` iterations each swarm's best particle and
   ``polish_count - 1`` random members (for diversity: the polish from a random member often
   lands on a solution branch the swarm has not settled on) are refined by ``polish.polish``
@@ -25,8 +25,12 @@ Additions of ours, documented in the README, each on by default because it measu
 * the run stops after a polish round when at least ``agreement`` of the refined candidates reach
   the goal with the best motion time (independent starting points agreeing), or when the best F
   has improved by less than ``tol`` for ``patience_rounds`` rounds (three times as many while
-  the goal is not reached; the paper's convergence precision), or after ``max_iter`` iterations. F itself is not compared for agreement: eq. (17)
-  changes it by 0.024 per picometre of error, far below any meaningful difference.
+  the goal is not reached; the paper's convergence precision), or after ``max_iter``
+  iterations. F itself is not compared for agreement: eq. (17) changes it by 0.024 per
+  picometre of error, far below any meaningful difference;
+* a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
+  still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
+  has a shorter motion time: a third fewer polish steps, at the same success rate.
 """
 from __future__ import annotations
 
@@ -36,7 +40,12 @@ from .objective import Objective
 from .optimize import History, OptimizeResult, initial_population
 from .polish import polish as polish_candidates
 
-__all__ = ["iepso"]
+__all__ = ["iepso", "FREE_SWARMS", "RADIAL_SWARMS"]
+
+#: Default number of swarms. Radial goals have isolated solutions (as many equations as joints)
+#: and the best one is often found by only a few swarms: 24 swarms miss it about three times
+#: less often than 16 (README), at about the same mean time because fewer runs need a second round.
+FREE_SWARMS, RADIAL_SWARMS = 16, 24
 
 
 def _agreeing(motion_time: np.ndarray, error: np.ndarray, eps: float) -> int:
@@ -48,7 +57,7 @@ def _agreeing(motion_time: np.ndarray, error: np.ndarray, eps: float) -> int:
 
 
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-          seed: int | np.random.Generator | None = None, swarms: int = 16, polish: bool = True,
+          seed: int | np.random.Generator | None = None, swarms: int | None = None, polish: bool = True,
           polish_period: int = 5, polish_count: int = 6, polish_steps: int = 8,
           agreement: int = 4, patience_rounds: int = 4, restart: bool = True,
           elimination: float = 0.1, elimination_period: int = 5,
@@ -57,8 +66,11 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     """Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
 
     ``max_velocity`` caps each velocity component at that fraction of the joint's range.
+    ``swarms`` defaults to 16 in free mode and 24 in radial mode.
     Without ``polish`` this is the paper's algorithm alone, stopped by ``History.stalled``.
     """
+    if swarms is None:
+        swarms = RADIAL_SWARMS if obj.radial else FREE_SWARMS
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError("population must be >= 2; swarms, max_iter, polish_count and "
                          "polish_period >= 1")
