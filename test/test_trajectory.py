@@ -42,6 +42,17 @@ def test_no_motion_gives_one_resting_point():
     np.testing.assert_array_equal(traj.velocities, 0.0)
 
 
+def test_a_joint_that_barely_moves_adds_no_point_at_the_start():
+    # an optimiser's answer may leave a joint 1e-17 rad off its start: that arrival is not a point
+    goal = GOAL + np.array([0.0, 0.0, 0.0, 1e-17, 1e-15])
+    traj = servo_trajectory(START, goal, OMEGA)
+    assert traj.times[0] >= 1e-6 and np.all(np.diff(traj.times) > 1e-6)
+    np.testing.assert_array_equal(traj.positions[-1], goal)
+    tiny = servo_trajectory(START, START + 1e-12, OMEGA, sample_period=0.2)
+    assert tiny.times.tolist() == [0.2]
+    np.testing.assert_array_equal(tiny.positions[-1], START + 1e-12)
+
+
 def test_bad_arguments_raise():
     with pytest.raises(ValueError):
         servo_trajectory(START, GOAL[:3], OMEGA)

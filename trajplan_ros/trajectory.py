@@ -15,6 +15,9 @@ import numpy as np
 
 __all__ = ["Trajectory", "servo_trajectory"]
 
+#: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
+_RESOLUTION = 1e-6
+
 
 @dataclass(frozen=True)
 class Trajectory:
@@ -43,7 +46,9 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
     """The fixed-angular-velocity motion from ``start`` to ``goal`` (both (n_joints,), rad).
 
-    A start equal to the goal gives one point at ``sample_period`` with zero velocity.
+    A start equal to the goal (or within a microsecond of motion of it) gives one point at
+    ``sample_period`` with zero velocity. A joint whose own motion is that short is not sampled
+    at its arrival, so no point lands at the start itself.
     """
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float)
@@ -55,14 +60,14 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     delta = goal - start
     arrive = np.abs(delta) / omega
     duration = float(arrive.max())
-    if duration == 0.0:
+    if duration <= _RESOLUTION:
         t = np.array([sample_period])
     else:
         grid = np.arange(1, int(np.floor(duration / sample_period)) + 1) * sample_period
-        t = np.unique(np.concatenate((grid, arrive[arrive > 0], [duration])))
-        t = t[(t > 0) & (t <= duration)]
+        t = np.unique(np.concatenate((grid, arrive, [duration])))
+        t = t[(t > _RESOLUTION) & (t <= duration)]
         # merge samples closer than a microsecond (a grid point on an arrival time)
-        t = t[np.concatenate((np.diff(t) > 1e-6, [True]))]
+        t = t[np.concatenate((np.diff(t) > _RESOLUTION, [True]))]
         t[-1] = duration
     direction = np.sign(delta)
     moving = t[:, None] < arrive[None, :] - 1e-12
