@@ -36,11 +36,16 @@ def test_chain_walk_matches_homogeneous_transforms(n):
     np.testing.assert_allclose(u, frames[:, -1, :3, 2], atol=1e-14)
 
 
+def arm_and_configurations(n: int, seed: int) -> tuple[np.random.Generator, ArmModel, np.ndarray]:
+    """The paper's arm (n = 5) or a random n-joint arm, and 20 random in-limit configurations."""
+    rng = np.random.default_rng(seed)
+    arm = paper_arm() if n == 5 else random_arm(rng, n)
+    return rng, arm, rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
+
+
 @pytest.mark.parametrize("n", [3, 5, 7])
 def test_jacobian_matches_finite_differences(n):
-    rng = np.random.default_rng(10 + n)
-    arm = paper_arm() if n == 5 else random_arm(rng, n)
-    q = rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
+    _, arm, q = arm_and_configurations(n, 10 + n)
     d = arm.tool_jacobian(q)
     p, jp, ju = d.p, d.jp, d.ju
     np.testing.assert_allclose(p, arm.tool(q)[0], atol=1e-15)
@@ -56,9 +61,7 @@ def test_jacobian_matches_finite_differences(n):
 
 @pytest.mark.parametrize("n", [3, 5, 7])
 def test_curvature_matches_finite_differences(n):
-    rng = np.random.default_rng(20 + n)
-    arm = paper_arm() if n == 5 else random_arm(rng, n)
-    q = rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
+    rng, arm, q = arm_and_configurations(n, 20 + n)
     direction = np.zeros_like(q)
     direction[:, : arm.planned] = rng.normal(size=(20, arm.planned))
     pdd, udd = arm.tool_jacobian(q).curvature(direction[:, : arm.planned])
