@@ -30,7 +30,7 @@ Additions of ours, documented in the README, each on by default because it measu
   picometre of error, far below any meaningful difference;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
-  has a shorter motion time: a third fewer polish steps, at the same success rate.
+  has a shorter motion time: about 30 % fewer polish steps, at the same success rate.
 """
 from __future__ import annotations
 
