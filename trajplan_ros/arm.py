@@ -85,6 +85,8 @@ class ToolJacobian:
 
 
 _NEXT, _LAST = [1, 2, 0], [2, 0, 1]      # (a x b)_c = a_{c+1} b_{c+2} - a_{c+2} b_{c+1}
+#: The tool point and axis in the last frame, as a chain walk's (w, z) tail: the origin and z.
+_TOOL_FRAME = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,8 +172,7 @@ class ArmModel:
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
         q = np.asarray(q, dtype=float)[None, :]
-        start = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
-        w, z = self._chain(q, self.n_joints, self.planned, start, jacobian=False)
+        w, z = self._chain(q, self.n_joints, self.planned, _TOOL_FRAME, jacobian=False)
         return w[:, 0], z[:, 0]
 
     def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
@@ -197,8 +198,7 @@ class ArmModel:
     def _walk(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None,
               jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
         if tail is None:
-            tail = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
-            return self._chain(q, self.n_joints, 0, tail, jacobian)
+            return self._chain(q, self.n_joints, 0, _TOOL_FRAME, jacobian)
         return self._chain(q, self.planned, 0, tail, jacobian)
 
     def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],

@@ -50,11 +50,14 @@ RULE_TABLE: dict[str, tuple[str, ...]] = {
     "L": ("VSP", "VVP", "RSP", "RSP", "NRP", "RLR", "RSR", "VSR"),
 }
 #: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the L, M, H sets on tau.
-_CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0])
+#: The rule base is evaluated in single precision (see ``RewardPunishment.rule_degree``).
+_SINGLE = np.float32
+_CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]).astype(_SINGLE)
 _TIME_CENTRES = {"L": 0.0, "M": 0.5, "H": 1.0}
-_SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]] for row in ("H", "M", "L")])
-_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ("H", "M", "L")])
-_ONES = np.ones(_SINGLETONS.size)
+_SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]]
+                        for row in ("H", "M", "L")]).astype(_SINGLE)
+_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ("H", "M", "L")]).astype(_SINGLE)
+_ONES = np.ones(_SINGLETONS.size, dtype=_SINGLE)
 
 
 def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
@@ -133,13 +136,12 @@ class RewardPunishment:
         this, the costliest part of F, because float32 exp is vectorised by numpy).
         """
         lam, tau = np.asarray(lam, dtype=float), np.asarray(tau, dtype=float)
-        single = np.float32
-        mu_col = gaussian(lam.ravel()[None, :].astype(single), _CLOSENESS_CENTRES[:, None].astype(single),
-                          single(self.sigma))                                             # (8, N)
-        mu_row = gaussian(tau.ravel()[None, :].astype(single), _ROW_CENTRES[:, None].astype(single),
-                          single(2 * self.sigma))                                         # (3, N)
+        mu_col = gaussian(lam.ravel()[None, :].astype(_SINGLE), _CLOSENESS_CENTRES[:, None],
+                          _SINGLE(self.sigma))                                            # (8, N)
+        mu_row = gaussian(tau.ravel()[None, :].astype(_SINGLE), _ROW_CENTRES[:, None],
+                          _SINGLE(2 * self.sigma))                                        # (3, N)
         weight = np.minimum(mu_row[:, None, :], mu_col[None, :, :]).reshape(_ONES.size, lam.size)
-        degree = (_SINGLETONS.ravel().astype(single) @ weight) / (_ONES.astype(single) @ weight)
+        degree = (_SINGLETONS.ravel() @ weight) / (_ONES @ weight)
         return degree.astype(float).reshape(lam.shape)
 
     def punishment(self, lam: np.ndarray) -> np.ndarray:

@@ -48,12 +48,14 @@ __all__ = ["iepso", "FREE_SWARMS", "RADIAL_SWARMS"]
 FREE_SWARMS, RADIAL_SWARMS = 16, 24
 
 
-def _agreeing(motion_time: np.ndarray, error: np.ndarray, eps: float) -> int:
-    """How many candidates reach the goal (error <= eps) within 1e-6 of the best such motion time."""
+def _agreeing(motion_time: np.ndarray, error: np.ndarray, eps: float) -> tuple[int, float]:
+    """How many candidates reach the goal (error <= eps) within 1e-6 of the best such motion
+    time, and that best time (inf when none reaches it)."""
     reached = error <= eps
     if not reached.any():
-        return 0
-    return int(np.count_nonzero(reached & (motion_time <= motion_time[reached].min() * (1 + 1e-6))))
+        return 0, np.inf
+    best = motion_time[reached].min()
+    return int(np.count_nonzero(reached & (motion_time <= best * (1 + 1e-6)))), float(best)
 
 
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
@@ -100,10 +102,9 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     def enough(r: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
         # polish early stop: agreement, and no candidate still converging (near the goal and not
         # stalled) is faster than the agreed one
-        if _agreeing(r, error, obj.shaping.eps) < agreement:
-            return False
-        reached = error <= obj.shaping.eps
-        return not np.any(active & ~reached & (error < near) & (r < r[reached].min()))
+        agree, best_r = _agreeing(r, error, obj.shaping.eps)
+        return agree >= agreement and not np.any(active & (error > obj.shaping.eps)
+                                                 & (error < near) & (r < best_r))
 
     for it in range(max_iter):
         frac = it / max(max_iter - 1, 1)
@@ -154,7 +155,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             best_err = pbest_err[rows, g_idx][np.argmin(swarm_best)]
             # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement
             # is judged on the motion time of the candidates that reach the goal
-            agree = _agreeing(rev.motion_time, rev.error, obj.shaping.eps)
+            agree, _ = _agreeing(rev.motion_time, rev.error, obj.shaping.eps)
             stable_rounds = stable_rounds + 1 if last_polished - best < tol else 0
             last_polished = best
             reached = best_err <= obj.shaping.eps
