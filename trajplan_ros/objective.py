@@ -68,7 +68,6 @@ class Objective:
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
         self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
         self.axis_target = float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial else 0.0
-        self.n_constraints = 4 if self.radial else 3
         self._tail = arm.held_tail(self.start)
 
     @property
