@@ -16,19 +16,20 @@ Additions of ours, documented in the README, each on by default because it measu
 * several independent swarms advance in one array (``swarms``: 16, or 24 in radial mode), so
   the vectorised cost of an iteration barely grows;
 * a memetic polish: every ``polish_period`` iterations each swarm's best particle and
-  ``polish_count - 1`` random members (for diversity: the polish from a random member often
-  lands on a solution branch the swarm has not settled on) are refined by ``polish.polish``
-  (exact reach, least motion time along the solutions, at most ``polish_steps`` steps); the best
-  refined one goes back into its swarm, which carries on from there;
+  ``polish_count - 1`` random members (5, or 9 in radial mode; for diversity: the polish from a
+  random member often lands on a solution branch the swarm has not settled on) are refined by
+  ``polish.polish`` (exact reach, least motion time along the solutions, at most
+  ``polish_steps`` steps: 8, or 6 in radial mode); the best refined one goes back into its
+  swarm, which carries on from there;
 * swarm-level last-elimination (``restart``): after a polish round, swarms whose best is worse
   than the overall best by more than ``tol`` are drawn anew;
 * the run stops after a polish round when at least ``agreement`` of the refined candidates have
   settled on the goal (error at most ``SETTLED``, 1e-14 m) with the best motion time
-  (independent starting points agreeing), or when the best F
-  has improved by less than ``tol`` for ``patience_rounds`` rounds (three times as many while
-  the goal is not reached; the paper's convergence precision), or after ``max_iter``
-  iterations. F itself is not compared for agreement: eq. (17) changes it by 0.024 per
-  picometre of error, far below any meaningful difference;
+  (independent starting points agreeing), or when the best F has improved by less than
+  ``tol`` for ``patience_rounds`` rounds (three times as many while the goal is not reached;
+  the paper's convergence precision), or after ``max_iter`` iterations. F itself is not
+  compared for agreement: eq. (17) changes it by 0.024 per picometre of error, far below any
+  meaningful difference;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   has a shorter motion time: in tuning runs, many fewer polish steps at the same success rate.
@@ -41,12 +42,15 @@ from .objective import Objective
 from .optimize import History, OptimizeResult, initial_population
 from .polish import polish as polish_candidates
 
-__all__ = ["iepso", "FREE_SWARMS", "RADIAL_SWARMS"]
+__all__ = ["iepso", "FREE_DEFAULTS", "RADIAL_DEFAULTS"]
 
-#: Default number of swarms. Radial goals have isolated solutions (as many equations as joints)
-#: and the best one is often found by only a few swarms: in tuning runs 24 swarms missed it clearly
-#: less often than 16, at about the same mean time because fewer runs need a second round.
-FREE_SWARMS, RADIAL_SWARMS = 16, 24
+#: Defaults of ``swarms``, ``polish_count`` and ``polish_steps`` by mode. Radial goals have
+#: isolated solutions (as many equations as joints) and the best one is often the landing point
+#: of only a few candidates: there more swarms and more polish candidates per swarm find it more
+#: often, and six steps are enough for Newton's method to settle on an isolated solution. Free
+#: goals have curves of solutions, along which the polish needs its eight steps.
+FREE_DEFAULTS = {"swarms": 16, "polish_count": 6, "polish_steps": 8}
+RADIAL_DEFAULTS = {"swarms": 24, "polish_count": 10, "polish_steps": 6}
 
 
 #: Error (m) below which a refined candidate counts towards agreement. Reaching eps is not
@@ -68,7 +72,7 @@ def _agreeing(motion_time: np.ndarray, error: np.ndarray) -> tuple[int, float]:
 
 def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
           seed: int | np.random.Generator | None = None, swarms: int | None = None, polish: bool = True,
-          polish_period: int = 5, polish_count: int = 6, polish_steps: int = 8,
+          polish_period: int = 5, polish_count: int | None = None, polish_steps: int | None = None,
           agreement: int = 4, patience_rounds: int = 4, restart: bool = True,
           elimination: float = 0.1, elimination_period: int = 5,
           inertia: tuple[float, float] = (0.9, 0.4), c1: float = 2.0, c2: float = 2.0,
@@ -76,11 +80,14 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     """Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
 
     ``max_velocity`` caps each velocity component at that fraction of the joint's range.
-    ``swarms`` defaults to 16 in free mode and 24 in radial mode.
-    Without ``polish`` this is the paper's algorithm alone, stopped by ``History.stalled``.
+    ``swarms``, ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
+    ``RADIAL_DEFAULTS``). Without ``polish`` this is the paper's algorithm alone, stopped by
+    ``History.stalled``.
     """
-    if swarms is None:
-        swarms = RADIAL_SWARMS if obj.radial else FREE_SWARMS
+    defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
+    swarms = defaults["swarms"] if swarms is None else swarms
+    polish_count = defaults["polish_count"] if polish_count is None else polish_count
+    polish_steps = defaults["polish_steps"] if polish_steps is None else polish_steps
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError("population must be >= 2; swarms, max_iter, polish_count and "
                          "polish_period >= 1")
