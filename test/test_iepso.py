@@ -5,6 +5,7 @@ import pytest
 from trajplan_ros.arm import ArmModel, paper_arm
 from trajplan_ros.iepso import iepso
 from trajplan_ros.objective import Objective
+from trajplan_ros.polish import curve_minima
 from trajplan_ros.reference import exact_minimum
 
 ARM = paper_arm()
@@ -60,6 +61,46 @@ def test_agreement_waits_for_settled_candidates(goal, start, seed):
     ref = exact_minimum(ARM, np.array(goal), np.array(start))
     assert res.error <= 1e-9
     assert res.motion_time <= ref.motion_time_s * 1.001
+
+
+#: Goals (bench --mode free --random-starts, seeds 3, 6 and 9) whose fastest solution lies on
+#: the same curve of solutions as the swarms' answer but beyond a joint-limit gap or a bump in
+#: the motion time, where the local polish cannot see it.
+CURVE_CASES = [
+    ([-0.20409769935647995, -0.10456289784470171, 0.04748181220501197],
+     [1.8724742996841428, -0.31727661434101706, 1.1238982511057185, -1.2932052740329412,
+      2.6120178318873677], 889701985),
+    ([-0.14682996654309383, 0.12331634061488152, 0.04185274036427678],
+     [0.48094187837659463, 0.48890919566823055, 2.1305881636552755, -2.300091789244345,
+      1.9564444529993166], 1358944411),
+    ([-0.14732031347343708, 0.09145416470637528, -0.10225488643503208],
+     [-0.30899230476008954, -0.41172085964899474, -2.162433944358706, -2.0079611188310844,
+      1.2132179509099315], 1887933805),
+]
+
+
+@pytest.mark.parametrize("goal, start, seed", CURVE_CASES)
+def test_curve_search_finds_the_faster_arc(goal, start, seed):
+    obj = Objective(ARM, np.array(goal), np.array(start))
+    ref = exact_minimum(ARM, np.array(goal), np.array(start))
+    without = iepso(obj, seed=seed, curve_search=0)
+    assert without.motion_time > ref.motion_time_s * 1.01       # the swarms settle elsewhere
+    res = iepso(obj, seed=seed)
+    assert res.error <= 1e-9
+    assert res.motion_time <= ref.motion_time_s * 1.001
+
+
+def test_curve_minima_are_in_limit_points_near_the_curve():
+    goal, start, seed = CURVE_CASES[0]
+    obj = Objective(ARM, np.array(goal), np.array(start))
+    x = iepso(obj, seed=seed, curve_search=0).x
+    seeds = curve_minima(obj, x)
+    assert len(seeds) >= 1
+    assert np.all((seeds >= obj.lower) & (seeds <= obj.upper))
+    assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
+    assert not np.any(np.all(seeds == x, axis=1))
+    radial = Objective(ARM, TARGET, np.zeros(5), mode="radial")   # isolated solutions: no curve
+    assert curve_minima(radial, iepso(radial, seed=0).x).shape == (0, 4)
 
 
 def test_same_seed_same_answer_bit_for_bit():

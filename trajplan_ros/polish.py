@@ -28,7 +28,7 @@ import numpy as np
 
 from .objective import Objective
 
-__all__ = ["polish"]
+__all__ = ["polish", "curve_minima"]
 
 _TIE = 1e-12
 
@@ -95,10 +95,10 @@ class _Linearisation:
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
     singularities); with one null direction (the usual case) it is the largest column of the
-    projector I - J^+ J.
+    projector I - J^+ J. ``curvature=False`` leaves the curvature out (zero), for speed.
     """
 
-    def __init__(self, obj: Objective, x: np.ndarray, weight: float) -> None:
+    def __init__(self, obj: Objective, x: np.ndarray, weight: float, curvature: bool = True) -> None:
         d = obj.tool_jacobian(x)
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
@@ -123,8 +123,8 @@ class _Linearisation:
                 self.null = (n / np.sqrt(np.einsum("ki,ki->k", n, n))[:, None])[:, None, :]
             else:
                 self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
-        self.half_curv = np.empty_like(self.null)
-        for j in range(self.null.shape[1]):
+        self.half_curv = np.zeros_like(self.null)
+        for j in range(self.null.shape[1] if curvature else 0):
             p2, u2 = d.curvature(self.null[:, j, :])
             c2 = np.concatenate((p2, u2[:, 2:3]), axis=1) if obj.radial else p2
             self.half_curv[:, j, :] = 0.5 * self.newton(c2)
@@ -187,3 +187,41 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
                               and enough(here.time, here.error, delta >= trust / 5)):
             break
     return x
+
+
+def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int = 18) -> np.ndarray:
+    """Seeds for ``polish``: the local minima of the motion time along the curve of solutions
+    through the solution x (planned,); empty unless the solutions there form a curve.
+
+    With one null direction (free mode, four planned joints) the solutions through x form a
+    curve. Joint limits cut it into arcs, and the motion time along it can have several local
+    minima that a polish from x cannot see. This follows the curve both ways for ``steps``
+    predictor-corrector steps of ``step`` rad (a tangent step, then one Newton correction),
+    straight through the joint limits (angles wrapped to [-pi, pi)), and returns the in-limit
+    samples, x itself excluded, whose motion time is no larger than that of their neighbours
+    along the curve and that may lead to a faster solution than x.
+    """
+    ends = np.stack((x, x)).astype(float)
+    here = _Linearisation(obj, ends, 1.0, curvature=False)
+    if here.null.shape[1] != 1:
+        return np.empty((0, x.size))
+    direction = here.null[:, 0, :] * np.array([[1.0], [-1.0]])     # both ways along the curve
+    path = []
+    for _ in range(steps):
+        ends = ends + direction * step
+        here = _Linearisation(obj, ends, 1.0, curvature=False)
+        ends = ends + here.newton(here.c)
+        turn = np.sign(np.einsum("ki,ki->k", here.null[:, 0, :], direction))
+        direction = here.null[:, 0, :] * turn[:, None]
+        path.append(np.mod(ends + np.pi, 2 * np.pi) - np.pi)
+    along = np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))
+    inside = np.all((along >= obj.lower) & (along <= obj.upper), axis=1)
+    near = obj.errors(*obj.tool(along)) <= 1e-2 * obj.arm.reach
+    time = np.where(inside & near, obj.motion_time(along), np.inf)
+    padded = np.concatenate(([np.inf], time, [np.inf]))
+    minima = np.isfinite(time) & (time <= padded[:-2]) & (time <= padded[2:])
+    minima[steps] = False                                            # x itself
+    # a local minimum lies within half a step of its sample, which is then at most step / 2 rad
+    # of motion away from it: samples slower than x by more than twice that cannot lead lower
+    minima &= time < time[steps] + step / obj.omega
+    return along[minima]
