@@ -4,7 +4,7 @@ a Python user would pick instead, on the same goals, starts, seeds and objective
 Methods (``METHODS``): the five algorithms of the paper through ``plan`` (IEPSO, PSO, SPSO, GA,
 DE), each with the default rewards-and-punishment term and with ``RewardPunishment(reward=False)``
 (suffix ``-noreward``, Fig. 10); IEPSO as published (``iepso-paper``: one swarm of 40, no
-polish); and scipy's ``differential_evolution`` (vectorised, polished, scipy's other defaults) and
+polish); IEPSO without its curve search (``iepso-nocurve``, an ablation); and scipy's ``differential_evolution`` (vectorised, polished, scipy's other defaults) and
 pyswarms' ``GlobalBestPSO`` (40 particles, 1000 iterations) minimising the same ``Objective``.
 
 Goals are tool positions of seeded random in-limit configurations (in radial mode only those
@@ -150,6 +150,8 @@ def _methods() -> dict[str, Method]:
                                partial(_core, algorithm, None, paper)))
             rows.append(Method("iepso-paper-noreward", "IEPSO as published, without the reward",
                                partial(_core, algorithm, _NO_REWARD, paper)))
+            rows.append(Method("iepso-nocurve", "IEPSO without the curve search (an ablation)",
+                               partial(_core, algorithm, None, {"curve_search": 0})))
     rows.append(Method("scipy-de", "scipy.optimize.differential_evolution (vectorized, polish)",
                        _scipy_de, "scipy"))
     rows.append(Method("pyswarms", f"pyswarms GlobalBestPSO ({PARTICLES} particles, "
