@@ -79,10 +79,24 @@ CURVE_CASES = [
 ]
 
 
-@pytest.mark.parametrize("goal, start, seed", CURVE_CASES)
-def test_curve_search_finds_the_faster_arc(goal, start, seed):
-    obj = Objective(ARM, np.array(goal), np.array(start))
-    ref = exact_minimum(ARM, np.array(goal), np.array(start))
+#: Radial goals (bench --mode radial --random-starts, seeds 5 and 7) whose fastest solution lies
+#: on the position-only curve through the swarms' answer.
+RADIAL_CURVE_CASES = [
+    ([0.04304774236358056, 0.2654821487746038, 0.1676819984043166],
+     [-0.9933372358905286, -0.8106853184496781, 1.0827542003880914, -1.2842389309609377,
+      1.9539684046866395], 1107168228),
+    ([-0.23800352631325447, 0.1666255355621998, 0.14167257538029973],
+     [0.14119010062413162, -1.1953064888478515, 1.3024334124714847, -0.16295662014572398,
+      -2.727379586408286], 836908462),
+]
+
+
+@pytest.mark.parametrize("goal, start, seed, mode",
+                         [(*case, "free") for case in CURVE_CASES]
+                         + [(*case, "radial") for case in RADIAL_CURVE_CASES])
+def test_curve_search_finds_the_faster_solution(goal, start, seed, mode):
+    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
     without = iepso(obj, seed=seed, curve_search=0)
     assert without.motion_time > ref.motion_time_s * 1.01       # the swarms settle elsewhere
     res = iepso(obj, seed=seed)
@@ -99,8 +113,18 @@ def test_curve_minima_are_in_limit_points_near_the_curve():
     assert np.all((seeds >= obj.lower) & (seeds <= obj.upper))
     assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
     assert not np.any(np.all(seeds == x, axis=1))
-    radial = Objective(ARM, TARGET, np.zeros(5), mode="radial")   # isolated solutions: no curve
-    assert curve_minima(radial, iepso(radial, seed=0).x).shape == (0, 4)
+    goal, start, seed = RADIAL_CURVE_CASES[0]
+    radial = Objective(ARM, np.array(goal), np.array(start), mode="radial")
+    x = iepso(radial, seed=seed, curve_search=0).x
+    seeds = curve_minima(radial, x)                    # near the other radial solutions
+    assert len(seeds) >= 1
+    assert np.all((seeds >= radial.lower) & (seeds <= radial.upper))
+    assert np.all(np.abs(radial.residuals(*radial.tool(seeds))[:, 3]) < 0.5)
+    six = ArmModel(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0], alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
+                   d=[0.2, 0, 0, 0.15, 0, 0.1], lower=np.full(6, -2.6), upper=np.full(6, 2.6))
+    # six joints, three position constraints: a surface of solutions, not a curve
+    free6 = Objective(six, six.tool(np.full((1, 6), 0.3))[0][0], np.zeros(6))
+    assert curve_minima(free6, np.full(6, 0.3)).shape == (0, 6)
 
 
 def test_same_seed_same_answer_bit_for_bit():

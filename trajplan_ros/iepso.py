@@ -33,10 +33,12 @@ Additions of ours, documented in the README, each on by default because it measu
 * a curve search when the run stops on an answer that fewer than ``curve_search`` (15) refined
   candidates agree on: with one free direction (free mode, four planned joints) the solutions
   through the answer form a curve, cut into arcs by the joint limits, and the motion time along
-  it can have several local minima that a local polish cannot see. ``polish.curve_minima``
-  follows the curve both ways through the limits, the polish refines its local minima, and a
-  faster one replaces the answer. In tuning runs searching after stronger agreement too found
-  nothing more, at twice the cost; ``curve_search=0`` turns it off;
+  it can have several local minima that a local polish cannot see; in radial mode the other
+  radial solutions on the position-only curve through the answer are where its axis residual
+  changes sign. ``polish.curve_minima`` follows the curve both ways through the limits, the
+  polish refines the seeds it returns, and a faster solution replaces the answer. In tuning runs
+  searching after stronger agreement too found nothing more, at twice the cost;
+  ``curve_search=0`` turns it off;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   has a shorter motion time: in tuning runs, many fewer polish steps at the same success rate.

@@ -189,22 +189,17 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     return x
 
 
-def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int = 18) -> np.ndarray:
-    """Seeds for ``polish``: the local minima of the motion time along the curve of solutions
-    through the solution x (planned,); empty unless the solutions there form a curve.
+def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray | None:
+    """Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x,
+    in order along it with x in the middle; None unless those solutions form a curve there.
 
-    With one null direction (free mode, four planned joints) the solutions through x form a
-    curve. Joint limits cut it into arcs, and the motion time along it can have several local
-    minima that a polish from x cannot see. This follows the curve both ways for ``steps``
-    predictor-corrector steps of ``step`` rad (a tangent step, then one Newton correction),
-    straight through the joint limits (angles wrapped to [-pi, pi)), and returns the in-limit
-    samples, x itself excluded, whose motion time is no larger than that of their neighbours
-    along the curve and that may lead to a faster solution than x.
+    ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
+    Newton correction), straight through the joint limits (angles wrapped to [-pi, pi)).
     """
     ends = np.stack((x, x)).astype(float)
     here = _Linearisation(obj, ends, 1.0, curvature=False)
     if here.null.shape[1] != 1:
-        return np.empty((0, x.size))
+        return None
     direction = here.null[:, 0, :] * np.array([[1.0], [-1.0]])     # both ways along the curve
     path = []
     for _ in range(steps):
@@ -214,14 +209,41 @@ def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int
         turn = np.sign(np.einsum("ki,ki->k", here.null[:, 0, :], direction))
         direction = here.null[:, 0, :] * turn[:, None]
         path.append(np.mod(ends + np.pi, 2 * np.pi) - np.pi)
-    along = np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))
+    return np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))
+
+
+def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int = 18) -> np.ndarray:
+    """Seeds for ``polish`` from the curve through the solution x (planned,) that may lead to
+    faster solutions than x; empty when there is no such curve.
+
+    * With one null direction (free mode, four planned joints) the solutions through x form a
+      curve. Joint limits cut it into arcs, and the motion time along it can have several
+      local minima that a polish from x cannot see: the seeds are the in-limit samples (x
+      excluded) whose motion time is no larger than that of their neighbours.
+    * In radial mode (isolated solutions) the solutions of the position constraint alone form
+      that curve, and the other radial solutions on it are where the axis residual changes
+      sign: the seeds are the in-limit samples next to each change, the closer one of each pair.
+
+    The curve is followed by ``_follow``; a seed must not be slower than x by more than
+    step / omega, as no solution within half a step of it could then be faster than x.
+    """
+    position = Objective(obj.arm, obj.goal, obj.start, omega=obj.omega) if obj.radial else obj
+    along = _follow(position, x, step, steps)
+    if along is None:
+        return np.empty((0, x.size))
     inside = np.all((along >= obj.lower) & (along <= obj.upper), axis=1)
-    near = obj.errors(*obj.tool(along)) <= 1e-2 * obj.arm.reach
+    p, u = obj.tool(along)
+    near = position.errors(p, u) <= 1e-2 * obj.arm.reach
     time = np.where(inside & near, obj.motion_time(along), np.inf)
-    padded = np.concatenate(([np.inf], time, [np.inf]))
-    minima = np.isfinite(time) & (time <= padded[:-2]) & (time <= padded[2:])
-    minima[steps] = False                                            # x itself
-    # a local minimum lies within half a step of its sample, which is then at most step / 2 rad
-    # of motion away from it: samples slower than x by more than twice that cannot lead lower
-    minima &= time < time[steps] + step / obj.omega
-    return along[minima]
+    if obj.radial:
+        axis = obj.residuals(p, u)[:, 3]
+        change = np.flatnonzero(np.sign(axis[:-1]) != np.sign(axis[1:]))
+        closer = change + (np.abs(axis[change + 1]) < np.abs(axis[change]))
+        seeds = np.zeros(time.size, dtype=bool)
+        seeds[closer] = True
+    else:
+        padded = np.concatenate(([np.inf], time, [np.inf]))
+        seeds = (time <= padded[:-2]) & (time <= padded[2:])
+    seeds[steps] = False                                             # x itself
+    seeds &= time < time[steps] + step / obj.omega
+    return along[seeds]
