@@ -18,6 +18,9 @@ both where two joints tie and where one joint's displacement is at a smooth mini
 repeatable. With more than one null direction (arms with more than four planned joints) the
 directions are taken in turn, a coordinate descent that may stop short of the optimum.
 A trust radius, a second-order correction and the merit R + W |c| make the steps safe.
+
+Being local, the polish cannot see a faster solution elsewhere on the curve of solutions
+through its answer; ``curve_minima`` follows that curve and returns seeds for another polish.
 """
 from __future__ import annotations
 
