@@ -125,6 +125,16 @@ def test_curve_minima_are_in_limit_points_near_the_curve():
     # six joints, three position constraints: a surface of solutions, not a curve
     free6 = Objective(six, six.tool(np.full((1, 6), 0.3))[0][0], np.zeros(6))
     assert curve_minima(free6, np.full(6, 0.3)).shape == (0, 6)
+    # the paper's arm with its wrist roll planned too: in radial mode the solutions form a curve
+    # along q5 (it turns the tool about its own axis), which the search follows
+    five = ArmModel(a=ARM.a, alpha=ARM.alpha, d=ARM.d, sign=ARM.sign, offset=ARM.offset,
+                    lower=ARM.lower, upper=ARM.upper, joint_names=ARM.joint_names, planned=5)
+    radial5 = Objective(five, TARGET, np.array([0, 0, 0, 0, 0.5]), mode="radial")
+    x5 = iepso(radial5, seed=0, curve_search=0).x
+    seeds5 = curve_minima(radial5, x5)
+    assert len(seeds5) >= 1
+    np.testing.assert_allclose(seeds5[:, :4], np.broadcast_to(x5[:4], (len(seeds5), 4)), atol=1e-9)
+    assert np.all(radial5(seeds5).error <= 1e-12)
 
 
 def test_same_seed_same_answer_bit_for_bit():

@@ -31,11 +31,11 @@ Additions of ours, documented in the README, each on by default because it measu
   compared for agreement: eq. (17) changes it by 0.024 per picometre of error, far below any
   meaningful difference;
 * a curve search when the run stops on an answer that fewer than ``curve_search`` (15) refined
-  candidates agree on: with one free direction (free mode, four planned joints) the solutions
-  through the answer form a curve, cut into arcs by the joint limits, and the motion time along
-  it can have several local minima that a local polish cannot see; in radial mode the other
-  radial solutions on the position-only curve through the answer are where its axis residual
-  changes sign. ``polish.curve_minima`` follows the curve both ways through the limits, the
+  candidates agree on: with one free direction (free mode with four planned joints, radial mode
+  with five) the solutions through the answer form a curve, cut into arcs by the joint limits,
+  and the motion time along it can have several local minima that a local polish cannot see;
+  where radial solutions are isolated, the others on the position-only curve through the
+  answer are where its axis residual changes sign. ``polish.curve_minima`` follows the curve both ways through the limits, the
   polish refines the seeds it returns, and a faster solution replaces the answer. In tuning runs
   searching after stronger agreement too found nothing more, at twice the cost;
   ``curve_search=0`` turns it off;

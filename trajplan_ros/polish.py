@@ -219,26 +219,31 @@ def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int
     """Seeds for ``polish`` from the curve through the solution x (planned,) that may lead to
     faster solutions than x; empty when there is no such curve.
 
-    * With one null direction (free mode, four planned joints) the solutions through x form a
-      curve. Joint limits cut it into arcs, and the motion time along it can have several
-      local minima that a polish from x cannot see: the seeds are the in-limit samples (x
-      excluded) whose motion time is no larger than that of their neighbours.
-    * In radial mode (isolated solutions) the solutions of the position constraint alone form
-      that curve, and the other radial solutions on it are where the axis residual changes
-      sign: the seeds are the in-limit samples next to each change, the closer one of each pair.
+    * With one null direction (free mode with four planned joints, radial mode with five) the
+      solutions through x form a curve. Joint limits cut it into arcs, and the motion time
+      along it can have several local minima that a polish from x cannot see: the seeds are
+      the in-limit samples (x excluded) whose motion time is no larger than that of their
+      neighbours.
+    * Where radial solutions are isolated (four planned joints) the solutions of the position
+      constraint alone form that curve, and the other radial solutions on it are where the axis
+      residual changes sign: the seeds are the in-limit samples next to each change, the closer
+      one of each pair.
 
     The curve is followed by ``_follow``; a seed must not be slower than x by more than
     step / omega, as no solution within half a step of it could then be faster than x.
     """
-    position = Objective(obj.arm, obj.goal, obj.start, omega=obj.omega) if obj.radial else obj
-    along = _follow(position, x, step, steps)
+    curve = obj
+    along = _follow(curve, x, step, steps)
+    if along is None and obj.radial:
+        curve = Objective(obj.arm, obj.goal, obj.start, omega=obj.omega)      # position only
+        along = _follow(curve, x, step, steps)
     if along is None:
         return np.empty((0, x.size))
     inside = np.all((along >= obj.lower) & (along <= obj.upper), axis=1)
     p, u = obj.tool(along)
-    near = position.errors(p, u) <= 1e-2 * obj.arm.reach
+    near = curve.errors(p, u) <= 1e-2 * obj.arm.reach
     time = np.where(inside & near, obj.motion_time(along), np.inf)
-    if obj.radial:
+    if curve is not obj:
         axis = obj.residuals(p, u)[:, 3]
         change = np.flatnonzero(np.sign(axis[:-1]) != np.sign(axis[1:]))
         closer = change + (np.abs(axis[change + 1]) < np.abs(axis[change]))
