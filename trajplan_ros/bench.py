@@ -4,8 +4,9 @@ a Python user would pick instead, on the same goals, starts, seeds and objective
 Methods (``METHODS``): the five algorithms of the paper through ``plan`` (IEPSO, PSO, SPSO, GA,
 DE), each with the default rewards-and-punishment term and with ``RewardPunishment(reward=False)``
 (suffix ``-noreward``, Fig. 10); IEPSO as published (``iepso-paper``: one swarm of 40, no
-polish); IEPSO without its curve search (``iepso-nocurve``, an ablation); and scipy's ``differential_evolution`` (vectorised, polished, scipy's other defaults) and
-pyswarms' ``GlobalBestPSO`` (40 particles, 1000 iterations) minimising the same ``Objective``.
+polish); IEPSO without its curve search (``iepso-nocurve``, an ablation); and scipy's
+``differential_evolution`` (vectorised, polished, scipy's other defaults) and pyswarms'
+``GlobalBestPSO`` (40 particles, 1000 iterations) minimising the same ``Objective``.
 
 Goals are tool positions of seeded random in-limit configurations (in radial mode only those
 with a radial solution); starts are q = 0 or random in-limit configurations. A plan succeeds when

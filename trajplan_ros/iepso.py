@@ -35,10 +35,10 @@ Additions of ours, documented in the README, each on by default because it measu
   with five) the solutions through the answer form a curve, cut into arcs by the joint limits,
   and the motion time along it can have several local minima that a local polish cannot see;
   where radial solutions are isolated, the others on the position-only curve through the
-  answer are where its axis residual changes sign. ``polish.curve_minima`` follows the curve both ways through the limits, the
-  polish refines the seeds it returns, and a faster solution replaces the answer. In tuning runs
-  searching after stronger agreement too found nothing more, at twice the cost;
-  ``curve_search=0`` turns it off;
+  answer are where its axis residual changes sign. ``polish.curve_minima`` follows the curve
+  both ways through the limits, the polish refines the seeds it returns, and a faster solution
+  replaces the answer. In tuning runs searching after stronger agreement too found nothing
+  more, at twice the cost; ``curve_search=0`` turns it off;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   has a shorter motion time: in tuning runs, many fewer polish steps at the same success rate.

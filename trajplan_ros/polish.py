@@ -192,17 +192,15 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     return x
 
 
-def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray | None:
-    """Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x,
-    in order along it with x in the middle; None unless those solutions form a curve there.
+def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray:
+    """Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x
+    (one null direction), in order along it with x in the middle.
 
     ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
     Newton correction), straight through the joint limits (angles wrapped to [-pi, pi)).
     """
     ends = np.stack((x, x)).astype(float)
     here = _Linearisation(obj, ends, 1.0, curvature=False)
-    if here.null.shape[1] != 1:
-        return None
     direction = here.null[:, 0, :] * np.array([[1.0], [-1.0]])     # both ways along the curve
     path = []
     for _ in range(steps):
@@ -232,13 +230,14 @@ def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int
     The curve is followed by ``_follow``; a seed must not be slower than x by more than
     step / omega, as no solution within half a step of it could then be faster than x.
     """
-    curve = obj
-    along = _follow(curve, x, step, steps)
-    if along is None and obj.radial:
+    free = x.size - (4 if obj.radial else 3)           # null directions: joints - constraints
+    if free == 1:
+        curve = obj
+    elif free == 0 and obj.radial:
         curve = Objective(obj.arm, obj.goal, obj.start, omega=obj.omega)      # position only
-        along = _follow(curve, x, step, steps)
-    if along is None:
+    else:
         return np.empty((0, x.size))
+    along = _follow(curve, x, step, steps)
     inside = np.all((along >= obj.lower) & (along <= obj.upper), axis=1)
     p, u = obj.tool(along)
     near = curve.errors(p, u) <= 1e-2 * obj.arm.reach
