@@ -38,7 +38,7 @@ Additions of ours, documented in the README, each on by default because it measu
   answer are where its axis residual changes sign. ``polish.curve_minima`` follows the curve
   both ways through the limits, the polish refines the seeds it returns, and a faster solution
   replaces the answer. In tuning runs searching after stronger agreement too found nothing
-  more, at twice the cost; ``curve_search=0`` turns it off;
+  more, at a higher cost; ``curve_search=0`` turns it off;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   has a shorter motion time: in tuning runs, many fewer polish steps at the same success rate.
