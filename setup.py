@@ -30,8 +30,8 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'trajplan = trajplan_ros.cli:main',
-            'planner_node = trajplan_ros.node:main',
+            'trajplan = trajplan_ros.tools.cli:main',
+            'planner_node = trajplan_ros.ros.node:main',
         ],
     },
 )

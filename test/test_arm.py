@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.arm import ArmModel, InvalidArmModel, paper_arm
+from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 
 PAPER_TARGET = np.array([0.151171, 0.19162, 0.172124])
 
@@ -25,7 +25,7 @@ def test_table5_iepso_row_lands_on_the_papers_target():
     assert np.linalg.norm(p[0] - PAPER_TARGET) == pytest.approx(0.805e-3, abs=0.01e-3)
 
 
-@pytest.mark.parametrize("n", [2, 5, 7])
+@pytest.mark.parametrize('n', [2, 5, 7])
 def test_chain_walk_matches_homogeneous_transforms(n):
     rng = np.random.default_rng(n)
     arm = paper_arm() if n == 5 else random_arm(rng, n)
@@ -43,7 +43,7 @@ def arm_and_configurations(n: int, seed: int) -> tuple[np.random.Generator, ArmM
     return rng, arm, rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
 
 
-@pytest.mark.parametrize("n", [3, 5, 7])
+@pytest.mark.parametrize('n', [3, 5, 7])
 def test_jacobian_matches_finite_differences(n):
     _, arm, q = arm_and_configurations(n, 10 + n)
     d = arm.tool_jacobian(q)
@@ -59,7 +59,7 @@ def test_jacobian_matches_finite_differences(n):
         np.testing.assert_allclose(ju[:, :, i], (up - um) / (2 * h), atol=1e-8)
 
 
-@pytest.mark.parametrize("n", [3, 5, 7])
+@pytest.mark.parametrize('n', [3, 5, 7])
 def test_curvature_matches_finite_differences(n):
     rng, arm, q = arm_and_configurations(n, 20 + n)
     direction = np.zeros_like(q)
@@ -77,13 +77,13 @@ def test_reach_bounds_every_tool_position():
     assert np.linalg.norm(arm.tool(q)[0], axis=1).max() <= arm.reach
 
 
-@pytest.mark.parametrize("change, reason", [
-    (dict(a=[0.1, np.nan]), "non-finite"),
-    (dict(lower=[0.0, 1.0], upper=[1.0, 0.5]), "lower limit"),
-    (dict(sign=[1, 2]), "sign"),
-    (dict(joint_names=["j", "j"]), "distinct"),
-    (dict(planned=1), "planned"),
-    (dict(d=[0.0]), "needs 2 values"),
+@pytest.mark.parametrize('change, reason', [
+    (dict(a=[0.1, np.nan]), 'non-finite'),
+    (dict(lower=[0.0, 1.0], upper=[1.0, 0.5]), 'lower limit'),
+    (dict(sign=[1, 2]), 'sign'),
+    (dict(joint_names=['j', 'j']), 'distinct'),
+    (dict(planned=1), 'planned'),
+    (dict(d=[0.0]), 'needs 2 values'),
 ])
 def test_invalid_models_are_refused_with_a_reason(change, reason):
     spec = dict(a=[0.1, 0.1], alpha=[0, 0], d=[0, 0], lower=[-1, -1], upper=[1, 1])
@@ -93,5 +93,5 @@ def test_invalid_models_are_refused_with_a_reason(change, reason):
 
 
 def test_an_arm_without_joints_is_refused():
-    with pytest.raises(InvalidArmModel, match="no joints"):
+    with pytest.raises(InvalidArmModel, match='no joints'):
         ArmModel(a=[], alpha=[], d=[], lower=[], upper=[])

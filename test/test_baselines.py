@@ -2,14 +2,14 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.arm import paper_arm
-from trajplan_ros.objective import Objective
-from trajplan_ros.planner import ALGORITHMS
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.planner import ALGORITHMS
 
 TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 
-@pytest.mark.parametrize("name", ["pso", "spso", "ga", "de"])
+@pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_baseline_runs_within_budget_and_improves(name):
     obj = Objective(paper_arm(), TARGET, np.zeros(5))
     res = ALGORITHMS[name](obj, population=40, max_iter=120, seed=7)
@@ -21,7 +21,7 @@ def test_baseline_runs_within_budget_and_improves(name):
     assert np.all((res.x >= obj.lower) & (res.x <= obj.upper))
 
 
-@pytest.mark.parametrize("name", ["pso", "spso", "ga", "de"])
+@pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_baseline_is_deterministic(name):
     obj = Objective(paper_arm(), TARGET, np.zeros(5))
     a = ALGORITHMS[name](obj, max_iter=30, seed=3)

@@ -13,24 +13,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from trajplan_ros.arm import paper_arm
-from trajplan_ros.bench import (METHODS, PAPER_TABLE5, Case, Progress, Results, draw_cases,
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.tools.bench.command import (METHODS, PAPER_TABLE5, Case, Progress, Results, draw_cases,
                                 format_failures, paper_case, run, summarise)
-from trajplan_ros.cli import main
-from trajplan_ros.objective import Mode, Objective
-from trajplan_ros.planner import plan
-from trajplan_ros.reference import exact_minimum
+from trajplan_ros.tools.cli import main
+from trajplan_ros.planning.objective import Mode, Objective
+from trajplan_ros.planning.planner import plan
+from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
-SUMMARY_HEADER = ["method", "goals", "success_rate", "median_error_m", "worst_error_m", "median_gap",
-                  "median_time_s", "p99_time_s", "time_ratio_to_iepso"]
-PLANS_HEADER = (["method", "goal_index", "seed", "goal_x_m", "goal_y_m", "goal_z_m"]
-                + [f"start_q{i}_rad" for i in range(1, 6)] + [f"q{i}_rad" for i in range(1, 5)]
-                + ["error_m", "motion_time_s", "exact_time_s", "gap", "efficiency", "time_s", "success"])
+SUMMARY_HEADER = ['method', 'goals', 'success_rate', 'median_error_m', 'worst_error_m', 'median_gap',
+                  'median_time_s', 'p99_time_s', 'time_ratio_to_iepso']
+PLANS_HEADER = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
+                + [f'start_q{i}_rad' for i in range(1, 6)] + [f'q{i}_rad' for i in range(1, 5)]
+                + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s', 'success'])
 
 
 def _read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
-    with open(path, newline="", encoding="utf-8") as handle:
+    with open(path, newline='', encoding='utf-8') as handle:
         rows = list(csv.reader(handle))
     return rows[0], [dict(zip(rows[0], r)) for r in rows[1:]]
 
@@ -56,15 +56,15 @@ def test_radial_cases_all_have_a_radial_solution() -> None:
     cases = draw_cases(ARM, 6, mode=Mode.RADIAL, random_starts=True, seed=0)
     assert len(cases) == 6
     for case in cases:
-        assert np.isfinite(exact_minimum(ARM, case.goal, case.start, mode="radial").motion_time_s)
-        assert case.exact_time == exact_minimum(ARM, case.goal, case.start, mode="radial").motion_time_s
+        assert np.isfinite(exact_minimum(ARM, case.goal, case.start, mode='radial').motion_time_s)
+        assert case.exact_time == exact_minimum(ARM, case.goal, case.start, mode='radial').motion_time_s
 
 
 def test_every_method_is_scored_on_the_same_objective() -> None:
     case = draw_cases(ARM, 1, mode=Mode.FREE, random_starts=True, seed=1)[0]
-    results = run([METHODS["iepso"], METHODS["iepso-noreward"]], [case], ARM, Mode.FREE)
+    results = run([METHODS['iepso'], METHODS['iepso-noreward']], [case], ARM, Mode.FREE)
     default_f = Objective(ARM, case.goal, case.start)
-    for name in ("iepso", "iepso-noreward"):
+    for name in ('iepso', 'iepso-noreward'):
         r = results[name]
         p = r.plans[0]
         assert np.array_equal(r.x[0], p.joint_goal[:4])
@@ -75,20 +75,20 @@ def test_every_method_is_scored_on_the_same_objective() -> None:
         # F is the default objective's (with reward) for every row, so rows are comparable
         assert r.efficiency[0] == default_f(r.x[0]).efficiency[0]
     same = plan(case.goal, case.start, seed=case.seed)
-    assert results["iepso"].efficiency[0] == pytest.approx(same.efficiency, abs=1e-9)
+    assert results['iepso'].efficiency[0] == pytest.approx(same.efficiency, abs=1e-9)
 
 
 def test_radial_random_starts_from_the_command_line(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["bench", "--goals", "1", "--mode", "radial", "--random-starts",
-                 "--algorithms", "iepso", "--quiet", "--seed", "4"]) == 0
+    assert main(['bench', '--goals', '1', '--mode', 'radial', '--random-starts',
+                 '--algorithms', 'iepso', '--quiet', '--seed', '4']) == 0
     out = capsys.readouterr().out
-    assert "1 goal, radial mode, random in-limit starts, seed 4" in out
-    assert "\niepso " in out
+    assert '1 goal, radial mode, random in-limit starts, seed 4' in out
+    assert '\niepso ' in out
 
 
 def test_same_seed_same_answers() -> None:
     case = draw_cases(ARM, 1, mode=Mode.FREE, random_starts=False, seed=2)[0]
-    names = ["iepso", "scipy-de"] if importlib.util.find_spec("scipy") else ["iepso"]
+    names = ['iepso', 'scipy-de'] if importlib.util.find_spec('scipy') else ['iepso']
     first = run([METHODS[n] for n in names], [case], ARM, Mode.FREE)
     second = run([METHODS[n] for n in names], [case], ARM, Mode.FREE)
     for n in names:
@@ -106,89 +106,89 @@ def _results(error: list[float], gap: list[float]) -> Results:
 def test_success_needs_both_the_error_and_the_gap() -> None:
     r = _results([0.0, 1e-6, 1.1e-6, 0.0, 5e-7], [0.0, 1e-3, 0.0, 1.01e-3, -1e-6])
     assert r.success.tolist() == [True, True, False, False, True]
-    (row,) = summarise({"iepso": r})
+    (row,) = summarise({'iepso': r})
     assert row.success_rate == pytest.approx(0.6)
     assert row.worst_error_m == 1.1e-6 and row.median_error_m == 5e-7
     assert row.median_time_s == pytest.approx(3e-3) and row.time_ratio_to_iepso == 1.0
     assert row.p99_time_s == pytest.approx(np.percentile([1e-3, 2e-3, 3e-3, 4e-3, 5e-3], 99))
-    (alone,) = summarise({"pso": r})
+    (alone,) = summarise({'pso': r})
     assert np.isnan(alone.time_ratio_to_iepso)                       # no IEPSO row to compare with
 
 
 def test_failures_are_listed_with_goal_start_seed_error_and_gap() -> None:
     goals, starts = np.array([[0.1, 0.2, 0.15], [0.2, 0.0, 0.1]]), np.array([np.full(5, 0.25), np.zeros(5)])
     cases = [Case(g, q, exact_minimum(ARM, g, q), seed) for g, q, seed in zip(goals, starts, (11, 12))]
-    results = {"iepso": _results([0.0, 0.0], [0.0, 0.0]), "ga": _results([3e-4, 0.0], [0.5, 0.2])}
+    results = {'iepso': _results([0.0, 0.0], [0.0, 0.0]), 'ga': _results([3e-4, 0.0], [0.5, 0.2])}
     text = format_failures(results, cases, limit=-1)
-    assert "iepso" not in text
-    assert "failures of ga (2 of 2):" in text
-    assert "goal (+0.1000, +0.2000, +0.1500) m" in text and "start (+0.250, +0.250" in text
-    assert "seed 11" in text and "error 3.00e-04 m" in text and "gap +50.000 %" in text
-    assert "seed 12" in text and "gap +20.000 %" in text
+    assert 'iepso' not in text
+    assert 'failures of ga (2 of 2):' in text
+    assert 'goal (+0.1000, +0.2000, +0.1500) m' in text and 'start (+0.250, +0.250' in text
+    assert 'seed 11' in text and 'error 3.00e-04 m' in text and 'gap +50.000 %' in text
+    assert 'seed 12' in text and 'gap +20.000 %' in text
     short = format_failures(results, cases, limit=1)
-    assert "seed 11" in short and "seed 12" not in short and "... 1 more" in short
-    assert format_failures({"iepso": results["iepso"]}, cases, limit=10) == "no failures"
+    assert 'seed 11' in short and 'seed 12' not in short and '... 1 more' in short
+    assert format_failures({'iepso': results['iepso']}, cases, limit=10) == 'no failures'
 
 
 def test_bench_quick_writes_the_table_and_csv_files(tmp_path: Path,
                                                     capsys: pytest.CaptureFixture[str]) -> None:
-    table, plans = tmp_path / "table.csv", tmp_path / "plans.csv"
-    assert main(["bench", "--quick", "--goals", "2", "--seed", "5", "--csv", str(table),
-                 "--plans-csv", str(plans)]) == 0
+    table, plans = tmp_path / 'table.csv', tmp_path / 'plans.csv'
+    assert main(['bench', '--quick', '--goals', '2', '--seed', '5', '--csv', str(table),
+                 '--plans-csv', str(plans)]) == 0
     out, err = capsys.readouterr()
     ran = [m.name for m in METHODS.values() if m.available]
-    assert "trajplan bench: 2 goals, free mode" in out and "time / iepso" in out
-    assert "bench: 2/2 goals" in err                                  # progress, on stderr
+    assert 'trajplan bench: 2 goals, free mode' in out and 'time / iepso' in out
+    assert 'bench: 2/2 goals' in err                                  # progress, on stderr
     for m in METHODS.values():
-        assert (f"{m.name}: {m.requires} is not installed, skipped" in out) == (not m.available)
+        assert (f'{m.name}: {m.requires} is not installed, skipped' in out) == (not m.available)
 
     header, rows = _read_csv(table)
     assert header == SUMMARY_HEADER
-    assert [r["method"] for r in rows] == ran
+    assert [r['method'] for r in rows] == ran
     header, per_plan = _read_csv(plans)
     assert header == PLANS_HEADER
     assert len(per_plan) == 2 * len(ran)
     for r in rows:
-        mine = [p for p in per_plan if p["method"] == r["method"]]
-        assert [p["goal_index"] for p in mine] == ["0", "1"]
-        ok = [float(p["error_m"]) <= 1e-6 and float(p["gap"]) <= 1e-3 for p in mine]
-        assert [p["success"] == "True" for p in mine] == ok
-        assert int(r["goals"]) == 2 and float(r["success_rate"]) == pytest.approx(np.mean(ok))
-        times = [float(p["time_s"]) for p in mine]
-        assert float(r["median_time_s"]) == pytest.approx(np.median(times))
-        assert float(r["worst_error_m"]) == pytest.approx(max(float(p["error_m"]) for p in mine))
-        assert float(r["time_ratio_to_iepso"]) > 0
+        mine = [p for p in per_plan if p['method'] == r['method']]
+        assert [p['goal_index'] for p in mine] == ['0', '1']
+        ok = [float(p['error_m']) <= 1e-6 and float(p['gap']) <= 1e-3 for p in mine]
+        assert [p['success'] == 'True' for p in mine] == ok
+        assert int(r['goals']) == 2 and float(r['success_rate']) == pytest.approx(np.mean(ok))
+        times = [float(p['time_s']) for p in mine]
+        assert float(r['median_time_s']) == pytest.approx(np.median(times))
+        assert float(r['worst_error_m']) == pytest.approx(max(float(p['error_m']) for p in mine))
+        assert float(r['time_ratio_to_iepso']) > 0
         for p in mine:
-            ratio = float(p["motion_time_s"]) / float(p["exact_time_s"])
-            assert float(p["gap"]) == pytest.approx(ratio - 1)
-    assert next(r for r in rows if r["method"] == "iepso")["time_ratio_to_iepso"] == "1.0"
+            ratio = float(p['motion_time_s']) / float(p['exact_time_s'])
+            assert float(p['gap']) == pytest.approx(ratio - 1)
+    assert next(r for r in rows if r['method'] == 'iepso')['time_ratio_to_iepso'] == '1.0'
     # the same goals and seeds for every method
-    goals = {(p["goal_index"], p["goal_x_m"], p["seed"]) for p in per_plan}
+    goals = {(p['goal_index'], p['goal_x_m'], p['seed']) for p in per_plan}
     assert len(goals) == 2
 
 
 def test_a_missing_peer_is_skipped_with_a_note(monkeypatch: pytest.MonkeyPatch,
                                                capsys: pytest.CaptureFixture[str]) -> None:
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda name, *a: None if name == "pyswarms" else real(name, *a))
-    assert main(["bench", "--goals", "1", "--algorithms", "iepso,pyswarms", "--quiet"]) == 0
+    monkeypatch.setattr(importlib.util, 'find_spec',
+                        lambda name, *a: None if name == 'pyswarms' else real(name, *a))
+    assert main(['bench', '--goals', '1', '--algorithms', 'iepso,pyswarms', '--quiet']) == 0
     out = capsys.readouterr().out
-    assert "pyswarms: pyswarms is not installed, skipped (pip install pyswarms" in out
-    assert "\niepso " in out and "\npyswarms " not in out
+    assert 'pyswarms: pyswarms is not installed, skipped (pip install pyswarms' in out
+    assert '\niepso ' in out and '\npyswarms ' not in out
 
 
 def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(tmp_path: Path,
                                                                monkeypatch: pytest.MonkeyPatch) -> None:
-    pytest.importorskip("pyswarms")
+    pytest.importorskip('pyswarms')
     monkeypatch.chdir(tmp_path)
     handlers = list(logging.getLogger().handlers)
     level = logging.getLogger().level
     np.random.seed(123)
     state = np.random.get_state()[1].copy()
     case = paper_case(ARM, Mode.FREE, 7)
-    a = METHODS["pyswarms"].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
-    b = METHODS["pyswarms"].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
+    a = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
+    b = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
     assert np.array_equal(a.x, b.x) and a.x.shape == (4,)
     assert list(tmp_path.iterdir()) == []                              # no ./report.log
     assert logging.getLogger().handlers == handlers and logging.getLogger().level == level
@@ -197,21 +197,21 @@ def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(tmp_path: Path,
 
 def test_paper_mode_lays_out_table5_and_fig10(tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
-    table = tmp_path / "paper.csv"
-    assert main(["bench", "--paper", "--runs", "2", "--algorithms", "iepso", "iepso-noreward",
-                 "--csv", str(table), "--quiet"]) == 0
+    table = tmp_path / 'paper.csv'
+    assert main(['bench', '--paper', '--runs', '2', '--algorithms', 'iepso', 'iepso-noreward',
+                 '--csv', str(table), '--quiet']) == 0
     out = capsys.readouterr().out
-    assert "Table 5 as printed" in out
+    assert 'Table 5 as printed' in out
     for name, (q, f, err) in PAPER_TABLE5.items():
-        line = next(l for l in out.splitlines() if l.startswith(name + " "))
-        assert f"{q[0]:+.2f}" in line and f"{f:.4g}" in line
-    exact = next(l for l in out.splitlines() if l.startswith("exact optimum"))
-    assert "4.514" in exact and "-19.49" in exact
-    assert "With and without the reward (Fig. 10)" in out
+        line = next(l for l in out.splitlines() if l.startswith(name + ' '))
+        assert f'{q[0]:+.2f}' in line and f'{f:.4g}' in line
+    exact = next(l for l in out.splitlines() if l.startswith('exact optimum'))
+    assert '4.514' in exact and '-19.49' in exact
+    assert 'With and without the reward (Fig. 10)' in out
     assert "Over all 2 run(s) on the paper's target" in out
     header, rows = _read_csv(table)
     assert header == SUMMARY_HEADER
-    assert [(r["method"], r["goals"]) for r in rows] == [("iepso", "2"), ("iepso-noreward", "2")]
+    assert [(r['method'], r['goals']) for r in rows] == [('iepso', '2'), ('iepso-noreward', '2')]
 
 
 def test_progress_on_a_pipe_is_a_line_every_tenth() -> None:
@@ -220,19 +220,19 @@ def test_progress_on_a_pipe_is_a_line_every_tenth() -> None:
     for _ in range(20):
         progress.step()
     lines = stream.getvalue().splitlines()
-    assert len(lines) == 10 and lines[-1].startswith("bench: 20/20 goals")
+    assert len(lines) == 10 and lines[-1].startswith('bench: 20/20 goals')
 
 
-@pytest.mark.parametrize("argv", [["bench", "--paper", "--goals", "3"], ["bench", "--runs", "2"],
-                                  ["bench", "--paper", "--random-starts"]])
+@pytest.mark.parametrize('argv', [['bench', '--paper', '--goals', '3'], ['bench', '--runs', '2'],
+                                  ['bench', '--paper', '--random-starts']])
 def test_contradictory_options_are_usage_errors(argv: list[str],
                                                 capsys: pytest.CaptureFixture[str]) -> None:
     assert main(argv) == 2
-    assert "trajplan: error:" in capsys.readouterr().err
+    assert 'trajplan: error:' in capsys.readouterr().err
 
 
 def test_unknown_method_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as exc:
-        main(["bench", "--algorithms", "iepso,simplex"])
+        main(['bench', '--algorithms', 'iepso,simplex'])
     assert exc.value.code == 2
     assert "unknown method 'simplex'" in capsys.readouterr().err

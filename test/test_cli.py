@@ -5,50 +5,50 @@ import sys
 
 import pytest
 
-from trajplan_ros.cli import main
+from trajplan_ros.tools.cli import main
 
-TARGET = ["0.151171", "0.19162", "0.172124"]
+TARGET = ['0.151171', '0.19162', '0.172124']
 
 
 def test_plan_one_goal_human_readable(capsys):
-    assert main(["plan", *TARGET]) == 0
+    assert main(['plan', *TARGET]) == 0
     out = capsys.readouterr().out
-    assert "succeeded" in out and "joint goal [rad]" in out and "4.5143 s" in out
+    assert 'succeeded' in out and 'joint goal [rad]' in out and '4.5143 s' in out
 
 
 def test_plan_json_radial(capsys):
-    assert main(["plan", *TARGET, "--mode", "radial", "--json", "--seed", "3"]) == 0
+    assert main(['plan', *TARGET, '--mode', 'radial', '--json', '--seed', '3']) == 0
     record = json.loads(capsys.readouterr().out)
-    assert record["success"] and record["mode"] == "radial"
-    assert record["motion_time_s"] == pytest.approx(6.691749, rel=1e-3)
+    assert record['success'] and record['mode'] == 'radial'
+    assert record['motion_time_s'] == pytest.approx(6.691749, rel=1e-3)
 
 
 def test_goals_file_keeps_order_and_reports_bad_lines(tmp_path, capsys):
-    goals = tmp_path / "goals.csv"
-    goals.write_text("# x,y,z[,start]\n0.151171,0.19162,0.172124\n1,2\n0.2,abc,0.1\n"
-                     "0.9,0.9,0.9\n0.2,0.1,0.15,0.1,0.2,0,0,0\n")
-    assert main(["plan", "--goals", str(goals), "--json"]) == 1
+    goals = tmp_path / 'goals.csv'
+    goals.write_text('# x,y,z[,start]\n0.151171,0.19162,0.172124\n1,2\n0.2,abc,0.1\n'
+                     '0.9,0.9,0.9\n0.2,0.1,0.15,0.1,0.2,0,0,0\n')
+    assert main(['plan', '--goals', str(goals), '--json']) == 1
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    assert [r["line"] for r in lines] == [2, 3, 4, 5, 6]
-    assert [r["success"] for r in lines] == [True, False, False, False, True]
-    assert "3 field(s)" not in lines[1]["message"] and "2 field(s)" in lines[1]["message"]
-    assert "not a number" in lines[2]["message"]
-    assert "beyond the arm's reach" in lines[3]["message"]
-    assert lines[4]["joint_goal"] is not None
+    assert [r['line'] for r in lines] == [2, 3, 4, 5, 6]
+    assert [r['success'] for r in lines] == [True, False, False, False, True]
+    assert '3 field(s)' not in lines[1]['message'] and '2 field(s)' in lines[1]['message']
+    assert 'not a number' in lines[2]['message']
+    assert "beyond the arm's reach" in lines[3]['message']
+    assert lines[4]['joint_goal'] is not None
 
 
-@pytest.mark.parametrize("argv, reason", [
-    (["plan", "0.1", "0.2"], "X Y Z"),
-    (["plan", *TARGET, "--start", "0", "0", "0", "0", "0", "0"], "at most 5"),
-    (["plan", "--goals", "/nonexistent/goals.csv"], "cannot read"),
+@pytest.mark.parametrize('argv, reason', [
+    (['plan', '0.1', '0.2'], 'X Y Z'),
+    (['plan', *TARGET, '--start', '0', '0', '0', '0', '0', '0'], 'at most 5'),
+    (['plan', '--goals', '/nonexistent/goals.csv'], 'cannot read'),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, reason, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
-    assert reason in err and "\n" not in err
+    assert reason in err and '\n' not in err
 
 
 def test_argparse_errors_exit_2():
-    proc = subprocess.run([sys.executable, "-m", "trajplan_ros.cli", "plan", "0.1", "nan", "0.1"],
+    proc = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'plan', '0.1', 'nan', '0.1'],
                           capture_output=True, text=True, timeout=60)
-    assert proc.returncode == 2 and "not a finite number" in proc.stderr
+    assert proc.returncode == 2 and 'not a finite number' in proc.stderr

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.fuzzy import (OUTPUT_LEVELS, RULE_TABLE, RewardPunishment, bell, gaussian,
+from trajplan_ros.planning.fuzzy import (OUTPUT_LEVELS, RULE_TABLE, RewardPunishment, bell, gaussian,
                                 linear_membership, sigmoid)
 
 S = RewardPunishment()
@@ -27,7 +27,7 @@ def test_reward_is_continuous_and_monotonic():
     assert abs(joint[1] - joint[0]) < 1e-6
 
 
-@pytest.mark.parametrize("scale", ["log", "linear"])
+@pytest.mark.parametrize('scale', ['log', 'linear'])
 def test_closeness_end_points_and_monotonic(scale):
     rp = RewardPunishment(lambda_scale=scale)
     np.testing.assert_allclose(rp.closeness(np.array([0.0, rp.eps, ERR_MAX]), ERR_MAX), [1, 0, -1],
@@ -40,7 +40,7 @@ def test_punishment_is_eq16():
     np.testing.assert_allclose(S.punishment(np.array([-1.0, 0.0])), [1e4, 1e4 * np.exp(-5)])
 
 
-@pytest.mark.parametrize("tau", [0.0, 0.3, 0.7, 1.0])
+@pytest.mark.parametrize('tau', [0.0, 0.3, 0.7, 1.0])
 def test_shaping_grows_strictly_with_error_above_eps(tau):
     err = np.logspace(np.log10(S.eps) + 1e-9, np.log10(ERR_MAX), 400)
     value = S(err, np.full(err.shape, tau), ERR_MAX)
@@ -49,7 +49,7 @@ def test_shaping_grows_strictly_with_error_above_eps(tau):
 
 
 def test_log_scale_keeps_a_slope_where_the_literal_eq15_is_flat():
-    literal = RewardPunishment(lambda_scale="linear", fuzzy_rules=False)
+    literal = RewardPunishment(lambda_scale='linear', fuzzy_rules=False)
     logged = RewardPunishment(fuzzy_rules=False)
     err = np.array([2e-3, 1e-5])           # 2 mm and 10 um
     tau = np.zeros(2)
@@ -59,7 +59,7 @@ def test_log_scale_keeps_a_slope_where_the_literal_eq15_is_flat():
 
 
 def test_rule_table_is_table1():
-    assert RULE_TABLE["H"][0] == "VSP" and RULE_TABLE["L"][-1] == "VSR"
+    assert RULE_TABLE['H'][0] == 'VSP' and RULE_TABLE['L'][-1] == 'VSR'
     assert all(len(row) == 8 for row in RULE_TABLE.values())
     assert set(sum(RULE_TABLE.values(), ())) <= set(OUTPUT_LEVELS)
 
@@ -85,8 +85,8 @@ def test_membership_functions_of_table2():
     np.testing.assert_allclose(linear_membership(x, 0.0, 2.0), [0.0, 0.5])
 
 
-@pytest.mark.parametrize("bad", [dict(eps=-1.0), dict(s=1e-3), dict(err_max=1e-9),
-                                 dict(lambda_scale="cubic"), dict(k=np.nan)])
+@pytest.mark.parametrize('bad', [dict(eps=-1.0), dict(s=1e-3), dict(err_max=1e-9),
+                                 dict(lambda_scale='cubic'), dict(k=np.nan)])
 def test_invalid_settings_are_refused(bad):
     with pytest.raises(ValueError):
         RewardPunishment(**bad)

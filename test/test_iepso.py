@@ -2,17 +2,17 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.arm import ArmModel, paper_arm
-from trajplan_ros.iepso import iepso
-from trajplan_ros.objective import Objective
-from trajplan_ros.polish import curve_minima
-from trajplan_ros.reference import exact_minimum
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning.iepso import iepso
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.polish import curve_minima
+from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
 TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 
-@pytest.mark.parametrize("mode", ["free", "radial"])
+@pytest.mark.parametrize('mode', ['free', 'radial'])
 def test_paper_target_exact_optimum(mode):
     obj = Objective(ARM, TARGET, np.zeros(5), mode=mode)
     ref = exact_minimum(ARM, TARGET, np.zeros(5), mode=mode)
@@ -55,7 +55,7 @@ SETTLING_CASES = [
 ]
 
 
-@pytest.mark.parametrize("goal, start, seed", SETTLING_CASES)
+@pytest.mark.parametrize('goal, start, seed', SETTLING_CASES)
 def test_agreement_waits_for_settled_candidates(goal, start, seed):
     res = iepso(Objective(ARM, np.array(goal), np.array(start)), seed=seed)
     ref = exact_minimum(ARM, np.array(goal), np.array(start))
@@ -91,9 +91,9 @@ RADIAL_CURVE_CASES = [
 ]
 
 
-@pytest.mark.parametrize("goal, start, seed, mode",
-                         [(*case, "free") for case in CURVE_CASES]
-                         + [(*case, "radial") for case in RADIAL_CURVE_CASES])
+@pytest.mark.parametrize('goal, start, seed, mode',
+                         [(*case, 'free') for case in CURVE_CASES]
+                         + [(*case, 'radial') for case in RADIAL_CURVE_CASES])
 def test_curve_search_finds_the_faster_solution(goal, start, seed, mode):
     obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
     ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
@@ -114,7 +114,7 @@ def test_curve_minima_are_in_limit_points_near_the_curve():
     assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
     assert not np.any(np.all(seeds == x, axis=1))
     goal, start, seed = RADIAL_CURVE_CASES[0]
-    radial = Objective(ARM, np.array(goal), np.array(start), mode="radial")
+    radial = Objective(ARM, np.array(goal), np.array(start), mode='radial')
     x = iepso(radial, seed=seed, curve_search=0).x
     seeds = curve_minima(radial, x)                    # near the other radial solutions
     assert len(seeds) >= 1
@@ -129,7 +129,7 @@ def test_curve_minima_are_in_limit_points_near_the_curve():
     # along q5 (it turns the tool about its own axis), which the search follows
     five = ArmModel(a=ARM.a, alpha=ARM.alpha, d=ARM.d, sign=ARM.sign, offset=ARM.offset,
                     lower=ARM.lower, upper=ARM.upper, joint_names=ARM.joint_names, planned=5)
-    radial5 = Objective(five, TARGET, np.array([0, 0, 0, 0, 0.5]), mode="radial")
+    radial5 = Objective(five, TARGET, np.array([0, 0, 0, 0, 0.5]), mode='radial')
     x5 = iepso(radial5, seed=0, curve_search=0).x
     seeds5 = curve_minima(radial5, x5)
     assert len(seeds5) >= 1
@@ -157,7 +157,7 @@ def test_papers_iepso_alone_gets_close_but_not_exact():
     assert res.fun < 0
 
 
-@pytest.mark.parametrize("n", [2, 3, 6, 7])
+@pytest.mark.parametrize('n', [2, 3, 6, 7])
 def test_other_chains_reach_goals_from_their_own_configurations(n):
     rng = np.random.default_rng(100 + n)
     arm = ArmModel(a=rng.uniform(0.05, 0.15, n), alpha=rng.choice([0.0, np.pi / 2, -np.pi / 2], n),

@@ -32,7 +32,7 @@ HOPELESS_GOAL = (0.05, -0.05, -0.25)              # inside the reach sphere, nev
 
 def fmt(xyz: tuple[float, ...]) -> str:
     """A point as the node writes it in its log lines."""
-    return re.escape("(" + ", ".join(f"{v:.6g}" for v in xyz) + ")")
+    return re.escape('(' + ', '.join(f'{v:.6g}' for v in xyz) + ')')
 
 
 def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> GetPlan.Request:
@@ -45,8 +45,8 @@ def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> Ge
 def started_from(node: NodeProcess, kind: str, goal: tuple[float, float, float],
                  after: int) -> tuple[str, np.ndarray]:
     """The label and start angles of the plan the node logged for ``goal`` after ``after``."""
-    m = node.wait_for(rf"\]: ({kind} #\d+) {fmt(goal)} m from q = \(([^)]*)\) rad: ", after)
-    return m.group(1), np.array([float(v) for v in m.group(2).split(",")])
+    m = node.wait_for(rf'\]: ({kind} #\d+) {fmt(goal)} m from q = \(([^)]*)\) rad: ', after)
+    return m.group(1), np.array([float(v) for v in m.group(2).split(',')])
 
 
 def trajectory_to(box, goal: tuple[float, float, float], arm=ARM, tol: float = 1e-5):
@@ -82,8 +82,8 @@ def check_servo_trajectory(msg: JointTrajectory, start: np.ndarray, omega: float
     assert np.all(np.isclose(np.abs(v), omega, rtol=0, atol=1e-12) | (v == 0))
     for j in range(len(names)):
         moving = v[:, j] != 0
-        assert np.all(np.diff(moving.astype(int)) <= 0), f"joint {names[j]} restarts"
-        assert len(set(np.sign(v[moving, j]))) <= 1, f"joint {names[j]} turns back"
+        assert np.all(np.diff(moving.astype(int)) <= 0), f'joint {names[j]} restarts'
+        assert len(set(np.sign(v[moving, j]))) <= 1, f'joint {names[j]} turns back'
     # positions: the first point is omega * t1 from the start (or at the start), then each
     # step moves by the velocity of the point before it (``start`` comes from a log line with
     # 6 significant digits, hence the looser tolerance where it enters)
@@ -102,7 +102,7 @@ def rotation(quat) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def planner(start_node) -> Iterator[NodeProcess]:
     """One planner node with default parameters, shared by this module's tests."""
     node = start_node()
@@ -110,37 +110,37 @@ def planner(start_node) -> Iterator[NodeProcess]:
     assert node.stop() == 0, node.output
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def trajectories(planner: NodeProcess, peer: Peer):
-    return peer.inbox(JointTrajectory, "/joint_trajectory")
+    return peer.inbox(JointTrajectory, '/joint_trajectory')
 
 
 def test_colcon_install_has_the_ament_layout(colcon_install: Install) -> None:
     prefix = colcon_install.prefix
-    assert (prefix / "share/ament_index/resource_index/packages/trajplan_ros").is_file()
-    assert (prefix / "share/trajplan_ros/package.xml").is_file()
+    assert (prefix / 'share/ament_index/resource_index/packages/trajplan_ros').is_file()
+    assert (prefix / 'share/trajplan_ros/package.xml').is_file()
     assert colcon_install.executable.is_file()
     assert os.access(colcon_install.executable, os.X_OK)
     # `ros2 run` looks the package up in the ament index, then runs lib/<package>/<executable>
-    lookup = ("from ament_index_python.packages import get_package_prefix;"
+    lookup = ('from ament_index_python.packages import get_package_prefix;'
               "print(get_package_prefix('trajplan_ros'))")
-    found = subprocess.run([sys.executable, "-c", lookup], capture_output=True, text=True,
+    found = subprocess.run([sys.executable, '-c', lookup], capture_output=True, text=True,
                            env=colcon_install.env(os.environ), timeout=LIVENESS_S)
     assert found.stdout.strip() == str(prefix), found.stderr
 
 
 def test_service_call_reaches_the_goal_and_publishes(planner, peer, trajectories) -> None:
     mark = planner.mark()
-    answer = peer.call(GetPlan, "/plan_trajectory", plan_request(PAPER_GOAL, tolerance=1e-4))
+    answer = peer.call(GetPlan, '/plan_trajectory', plan_request(PAPER_GOAL, tolerance=1e-4))
     poses = answer.plan.poses
     assert poses, planner.output
-    assert answer.plan.header.frame_id == "base_link"
+    assert answer.plan.header.frame_id == 'base_link'
     last = poses[-1].pose.position
     assert np.linalg.norm(np.array([last.x, last.y, last.z]) - PAPER_GOAL) <= 1e-4
 
     # the published trajectory ends at the planned joint angles: the ones plan() finds from
     # the same start with the same (default) seed
-    _, start = started_from(planner, "service call", PAPER_GOAL, mark)
+    _, start = started_from(planner, 'service call', PAPER_GOAL, mark)
     msg = trajectory_to(trajectories, PAPER_GOAL, tol=1e-4)
     end = check_servo_trajectory(msg, start)
     expected = plan(PAPER_GOAL, start, seed=0, tolerance=1e-4)
@@ -152,7 +152,7 @@ def test_service_call_reaches_the_goal_and_publishes(planner, peer, trajectories
     tool, axis = ARM.tool(q)
     frames = ARM.frames(q)[:, -1]
     for k, pose in enumerate(poses):
-        assert pose.header.frame_id == "base_link"
+        assert pose.header.frame_id == 'base_link'
         p, o = pose.pose.position, pose.pose.orientation
         np.testing.assert_allclose([p.x, p.y, p.z], tool[k], atol=1e-12)
         assert np.linalg.norm([o.x, o.y, o.z, o.w]) == pytest.approx(1.0)
@@ -163,8 +163,8 @@ def test_service_call_reaches_the_goal_and_publishes(planner, peer, trajectories
 def test_goal_topic_yields_a_controller_ready_trajectory(planner, peer, trajectories) -> None:
     goal = (0.1, 0.1, 0.2)
     mark = planner.mark()
-    peer.publisher(Point, "/goal").publish(Point(x=goal[0], y=goal[1], z=goal[2]))
-    _, start = started_from(planner, "goal", goal, mark)
+    peer.publisher(Point, '/goal').publish(Point(x=goal[0], y=goal[1], z=goal[2]))
+    _, start = started_from(planner, 'goal', goal, mark)
     end = check_servo_trajectory(trajectory_to(trajectories, goal), start)
     tool, _ = ARM.tool(end[None, :])
     assert np.linalg.norm(tool[0] - goal) <= 1e-6                 # the default tolerance
@@ -173,71 +173,71 @@ def test_goal_topic_yields_a_controller_ready_trajectory(planner, peer, trajecto
 
 def test_joint_states_give_the_start(planner, peer, trajectories) -> None:
     q_start = np.array([0.3, -0.2, 0.4, 0.1, 0.5])
-    states = peer.publisher(JointState, "/joint_states")
+    states = peer.publisher(JointState, '/joint_states')
     # the names are matched, not the order; other robots' joints are ignored
     order = [4, 2, 0, 1, 3]
-    state = JointState(name=["gripper"] + [ARM.joint_names[i] for i in order],
+    state = JointState(name=['gripper'] + [ARM.joint_names[i] for i in order],
                        position=[9.0] + q_start[order].tolist())
     # joint_states come again and again (the node takes them best effort) and travel apart
     # from the service: publish, and probe with a goal refused at once (its log line still
     # names the start), until the state has arrived
-    probe = (float("nan"), 0.0, 0.0)
+    probe = (float('nan'), 0.0, 0.0)
     deadline = time.monotonic() + LIVENESS_S
     while True:
         states.publish(state)
         mark = planner.mark()
-        assert not peer.call(GetPlan, "/plan_trajectory", plan_request(probe)).plan.poses
-        _, start = started_from(planner, "service call", probe, mark)
+        assert not peer.call(GetPlan, '/plan_trajectory', plan_request(probe)).plan.poses
+        _, start = started_from(planner, 'service call', probe, mark)
         if np.allclose(start, q_start, atol=1e-6) or time.monotonic() > deadline:
             break
     goal = (0.2, 0.0, 0.1)
     mark = planner.mark()
-    assert peer.call(GetPlan, "/plan_trajectory", plan_request(goal)).plan.poses
-    _, start = started_from(planner, "service call", goal, mark)
+    assert peer.call(GetPlan, '/plan_trajectory', plan_request(goal)).plan.poses
+    _, start = started_from(planner, 'service call', goal, mark)
     np.testing.assert_allclose(start, q_start, atol=1e-6)
     end = check_servo_trajectory(trajectory_to(trajectories, goal), q_start)
     assert end[4] == pytest.approx(0.5)
 
     # a message with NaN is refused with the reason; the start stays the last good one
     mark = planner.mark()
-    nan_state = JointState(name=list(ARM.joint_names), position=[0.0, float("nan"), 0, 0, 0])
+    nan_state = JointState(name=list(ARM.joint_names), position=[0.0, float('nan'), 0, 0, 0])
     wait_until(lambda: states.publish(nan_state) or planner.has(
-        r"ignored joint_states: non-finite position for joint2", mark), what="the NaN refused")
+        r'ignored joint_states: non-finite position for joint2', mark), what='the NaN refused')
     mark = planner.mark()
-    assert peer.call(GetPlan, "/plan_trajectory", plan_request(goal)).plan.poses
-    _, start = started_from(planner, "service call", goal, mark)
+    assert peer.call(GetPlan, '/plan_trajectory', plan_request(goal)).plan.poses
+    _, start = started_from(planner, 'service call', goal, mark)
     np.testing.assert_allclose(start, q_start, atol=1e-6)
 
 
 def test_bad_goals_publish_nothing_and_the_node_lives_on(planner, peer, trajectories) -> None:
     mark = planner.mark()
-    goals = peer.publisher(Point, "/goal")
-    goals.publish(Point(x=float("nan"), y=0.0, z=0.1))
-    planner.wait_for(r"goal #\d+ \(nan, 0, 0.1\) m from .*: rejected: goal has a non-finite", mark)
+    goals = peer.publisher(Point, '/goal')
+    goals.publish(Point(x=float('nan'), y=0.0, z=0.1))
+    planner.wait_for(r'goal #\d+ \(nan, 0, 0.1\) m from .*: rejected: goal has a non-finite', mark)
     goals.publish(Point(x=1.0, y=0.0, z=0.0))
-    planner.wait_for(r"goal #\d+ \(1, 0, 0\) m from .*: rejected: goal is 1.0000 m from the base, "
+    planner.wait_for(r'goal #\d+ \(1, 0, 0\) m from .*: rejected: goal is 1.0000 m from the base, '
                      r"beyond the arm's reach", mark)
-    answer = peer.call(GetPlan, "/plan_trajectory", plan_request((0.0, float("inf"), 0.2)))
+    answer = peer.call(GetPlan, '/plan_trajectory', plan_request((0.0, float('inf'), 0.2)))
     assert list(answer.plan.poses) == []                 # empty plan: failure, as in nav
-    planner.wait_for(r"service call #\d+ \(0, inf, 0.2\) m from .*: rejected: ", mark)
+    planner.wait_for(r'service call #\d+ \(0, inf, 0.2\) m from .*: rejected: ', mark)
     assert planner.proc.poll() is None
 
     # still planning; of all plans since the bad goals only this one published a trajectory
     good = (0.2, 0.1, 0.15)
-    answer = peer.call(GetPlan, "/plan_trajectory", plan_request(good))
+    answer = peer.call(GetPlan, '/plan_trajectory', plan_request(good))
     assert answer.plan.poses
     trajectory_to(trajectories, good)
-    planner.wait_for(rf"service call #\d+ {fmt(good)} m from .*; published ", mark)
-    published = [line for line in planner.lines[mark:] if "; published " in line]
+    planner.wait_for(rf'service call #\d+ {fmt(good)} m from .*; published ', mark)
+    published = [line for line in planner.lines[mark:] if '; published ' in line]
     assert len(published) == 1, published
-    assert "Traceback" not in planner.output
+    assert 'Traceback' not in planner.output
 
 
 def test_simultaneous_service_calls_are_all_answered(planner, peer) -> None:
     goals = [(0.15, 0.15, 0.15), (0.2, -0.1, 0.1), (0.1, 0.2, 0.2), (0.25, 0.0, 0.05)]
-    futures = [peer.call_async(GetPlan, "/plan_trajectory", plan_request(g)) for g in goals]
+    futures = [peer.call_async(GetPlan, '/plan_trajectory', plan_request(g)) for g in goals]
     # the node answers its parameter services meanwhile
-    assert peer.get_parameters("/trajplan", ["angular_velocity"]) == [OMEGA]
+    assert peer.get_parameters('/trajplan', ['angular_velocity']) == [OMEGA]
     for goal, future in zip(goals, futures):
         poses = peer.result(future).plan.poses
         assert poses, planner.output
@@ -245,24 +245,24 @@ def test_simultaneous_service_calls_are_all_answered(planner, peer) -> None:
         np.testing.assert_allclose([last.x, last.y, last.z], goal, atol=1e-6)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_signal_mid_plan_ends_the_node_promptly_and_cleanly(start_node, peer, sig) -> None:
     # a plan that runs for minutes: a goal never reached, by plain PSO, a big swarm, no cap
-    node = start_node("-r", "__ns:=/sig", "-p", "algorithm:=pso", "-p", "population:=5000",
-                      "-p", "max_iterations:=1000000", "--log-level", "sig.trajplan:=debug")
-    pending = peer.call_async(GetPlan, "/sig/plan_trajectory", plan_request(HOPELESS_GOAL))
-    node.wait_for(r"planning service call #1 ")        # an executor thread waits on this call
-    peer.publisher(Point, "/sig/goal").publish(Point(x=0.1, y=0.1, z=0.2))    # queued behind it
+    node = start_node('-r', '__ns:=/sig', '-p', 'algorithm:=pso', '-p', 'population:=5000',
+                      '-p', 'max_iterations:=1000000', '--log-level', 'sig.trajplan:=debug')
+    pending = peer.call_async(GetPlan, '/sig/plan_trajectory', plan_request(HOPELESS_GOAL))
+    node.wait_for(r'planning service call #1 ')        # an executor thread waits on this call
+    peer.publisher(Point, '/sig/goal').publish(Point(x=0.1, y=0.1, z=0.2))    # queued behind it
     node.proc.send_signal(sig)
     began = time.monotonic()
     try:
         code = node.proc.wait(timeout=2.0)
     except subprocess.TimeoutExpired:
         node.stop(signal.SIGKILL)
-        pytest.fail(f"node still running 2 s after {sig.name}:\n{node.output}")
+        pytest.fail(f'node still running 2 s after {sig.name}:\n{node.output}')
     elapsed = time.monotonic() - began
     node.stop()
     assert code == 0, node.output
-    assert "Traceback" not in node.output
-    assert not re.search(r"service call #1 .* rad: ", node.output)      # it was mid-plan
-    print(f"{sig.name}: exited {elapsed:.3f} s after the signal; call answered: {pending.done()}")
+    assert 'Traceback' not in node.output
+    assert not re.search(r'service call #1 .* rad: ', node.output)      # it was mid-plan
+    print(f'{sig.name}: exited {elapsed:.3f} s after the signal; call answered: {pending.done()}')

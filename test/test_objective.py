@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.arm import paper_arm
-from trajplan_ros.objective import InvalidRequest, Objective
-from trajplan_ros.reference import exact_minimum
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.objective import InvalidRequest, Objective
+from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
 TARGET = np.array([0.151171, 0.19162, 0.172124])
@@ -25,8 +25,8 @@ def test_efficiency_at_an_exact_solution_is_r_minus_24():
 
 def test_radial_error_vanishes_only_at_radial_solutions():
     free = exact_minimum(ARM, TARGET, np.zeros(5)).joint_goal[None, :]
-    radial = exact_minimum(ARM, TARGET, np.zeros(5), mode="radial").joint_goal[None, :]
-    obj = Objective(ARM, TARGET, np.zeros(5), mode="radial")
+    radial = exact_minimum(ARM, TARGET, np.zeros(5), mode='radial').joint_goal[None, :]
+    obj = Objective(ARM, TARGET, np.zeros(5), mode='radial')
     assert obj(radial).error[0] < 1e-12
     assert obj(free).error[0] > 1e-3
 
@@ -39,13 +39,13 @@ def test_vectorised_over_particles():
     np.testing.assert_allclose(batch.efficiency[:3], [e.efficiency[0] for e in single])
 
 
-@pytest.mark.parametrize("goal, start, reason", [
-    ([np.nan, 0.1, 0.1], None, "non-finite"),
+@pytest.mark.parametrize('goal, start, reason', [
+    ([np.nan, 0.1, 0.1], None, 'non-finite'),
     ([0.3, 0.3, 0.3], None, "beyond the arm's reach"),
-    ([0.1, 0.1], None, "3 coordinates"),
-    (TARGET, [0, 0, 0, 0, 4.0], "outside its limits"),
-    (TARGET, [0, 0, np.inf, 0, 0], "non-finite"),
-    (TARGET, [0, 0, 0], "5 joint angles"),
+    ([0.1, 0.1], None, '3 coordinates'),
+    (TARGET, [0, 0, 0, 0, 4.0], 'outside its limits'),
+    (TARGET, [0, 0, np.inf, 0, 0], 'non-finite'),
+    (TARGET, [0, 0, 0], '5 joint angles'),
 ])
 def test_bad_requests_are_refused_before_optimisation(goal, start, reason):
     with pytest.raises(InvalidRequest, match=reason):
@@ -56,4 +56,4 @@ def test_bad_settings_raise():
     with pytest.raises(ValueError):
         Objective(ARM, TARGET, np.zeros(5), omega=0.0)
     with pytest.raises(ValueError):
-        Objective(ARM, TARGET, np.zeros(5), mode="sideways")
+        Objective(ARM, TARGET, np.zeros(5), mode='sideways')

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.trajectory import servo_trajectory
+from trajplan_ros.planning.trajectory import servo_trajectory
 
 START = np.array([0.0, 0.5, -0.2, 0.1, 0.0])
 GOAL = np.array([0.9, 0.1, 0.3, 0.1, 0.0])

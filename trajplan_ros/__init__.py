@@ -1,15 +1,22 @@
 """trajplan_ros: direct trajectory planning with IEPSO and fuzzy rewards and punishment.
 
-The planning core (this package minus ``node``) is pure numpy and imports without ROS 2.
+The package is layered; each layer uses only those listed before it:
+
+* ``kinematics``: the arm model (forward kinematics and Jacobian), pure numpy;
+* ``planning``: the objective, the fuzzy shaping, IEPSO and the comparison optimisers, the
+  polish, the trajectory and ``plan``, pure numpy;
+* ``ros``: the ROS 2 node (the only layer besides ``tools`` that imports rclpy);
+* ``tools``: the ``trajplan`` command, benchmarks, figures and the demo.
+
+The names below are the public library API.
 """
-from .arm import ArmModel, InvalidArmModel, paper_arm
-from .fuzzy import RewardPunishment
-from .objective import InvalidRequest, Mode, Objective
-from .planner import ALGORITHMS, DEFAULT_TOLERANCE, PlanResult, PlanStatus, plan
-from .trajectory import Trajectory, servo_trajectory
+from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
+from trajplan_ros.planning import (ALGORITHMS, DEFAULT_TOLERANCE, InvalidRequest, Mode,
+                                   Objective, PlanResult, PlanStatus, RewardPunishment,
+                                   Trajectory, plan, servo_trajectory)
 
 __all__ = [
-    "ALGORITHMS", "ArmModel", "DEFAULT_TOLERANCE", "InvalidArmModel", "InvalidRequest", "Mode",
-    "Objective", "PlanResult", "PlanStatus", "RewardPunishment", "Trajectory", "paper_arm",
-    "plan", "servo_trajectory",
+    'ALGORITHMS', 'ArmModel', 'DEFAULT_TOLERANCE', 'InvalidArmModel', 'InvalidRequest', 'Mode',
+    'Objective', 'PlanResult', 'PlanStatus', 'RewardPunishment', 'Trajectory', 'paper_arm',
+    'plan', 'servo_trajectory',
 ]

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Trajectory", "servo_trajectory"]
+__all__ = ['Trajectory', 'servo_trajectory']
 
 #: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
 _RESOLUTION = 1e-6
@@ -53,10 +53,10 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float)
     if start.shape != goal.shape or start.ndim != 1:
-        raise ValueError("start and goal must be joint vectors of the same length")
+        raise ValueError('start and goal must be joint vectors of the same length')
     if not (np.isfinite(omega) and omega > 0 and np.isfinite(sample_period) and sample_period > 0):
-        raise ValueError("omega and sample_period must be finite and positive")
-    names = joint_names or tuple(f"joint{i + 1}" for i in range(start.size))
+        raise ValueError('omega and sample_period must be finite and positive')
+    names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
     delta = goal - start
     arrive = np.abs(delta) / omega
     duration = float(arrive.max())

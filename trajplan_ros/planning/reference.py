@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import ArmModel
+from trajplan_ros.kinematics import ArmModel
 
-__all__ = ["ExactOptimum", "exact_minimum", "radial_angle"]
+__all__ = ['ExactOptimum', 'exact_minimum', 'radial_angle']
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.
 
 
 def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
-                  mode: str = "free", samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
+                  mode: str = 'free', samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
     """True minimum of R = max|q - start| / omega over all in-limit q that reach ``goal`` exactly.
 
     mode "free": sweep phi over [-pi, pi]; mode "radial": phi is fixed by eq. (12)-(13) to
@@ -84,12 +84,12 @@ def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: 
     _check_family(arm)
     goal = np.asarray(goal, dtype=float)
     start = np.asarray(start, dtype=float)
-    if mode == "radial":
+    if mode == 'radial':
         eps = radial_angle(goal)
         phis = np.array([eps, -eps])
         q = _solutions(arm, goal, phis).reshape(-1, 4)
         t = _times(arm, q, start, omega)
-    elif mode == "free":
+    elif mode == 'free':
         phis = np.linspace(-np.pi, np.pi, samples)
         step = phis[1] - phis[0]
         for _ in range(zoom_levels):

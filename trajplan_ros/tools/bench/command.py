@@ -32,26 +32,17 @@ from unittest import mock
 
 import numpy as np
 
-from .arm import ArmModel, paper_arm
-from .cli import UsageError
-from .fuzzy import RewardPunishment
-from .objective import DEFAULT_OMEGA, Mode, Objective
-from .planner import ALGORITHMS, PlanResult, plan
-from .reference import ExactOptimum, exact_minimum
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.tools.arguments import UsageError, positive_count
+from trajplan_ros.planning.fuzzy import RewardPunishment
+from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode, Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TABLE5, PAPER_TARGET
+from trajplan_ros.planning.planner import ALGORITHMS, PlanResult, plan
+from trajplan_ros.planning.reference import ExactOptimum, exact_minimum
 
-__all__ = ["METHODS", "Method", "Answer", "Case", "Results", "PAPER_TARGET", "PAPER_TABLE5",
-           "draw_cases", "paper_case", "run", "summarise", "add_parser"]
+__all__ = ['METHODS', 'Method', 'Answer', 'Case', 'Results', 'PAPER_TARGET', 'PAPER_TABLE5',
+           'draw_cases', 'paper_case', 'run', 'summarise', 'add_parser']
 
-#: The paper's target (section VI.B), m, reached from the upright pose q = 0.
-PAPER_TARGET = np.array([0.151171, 0.19162, 0.172124])
-#: Table 5 as printed: (q1..q4 in rad, efficiency scalar F, error in mm).
-PAPER_TABLE5: dict[str, tuple[tuple[float, ...], float, float]] = {
-    "pso": ((-2.24, -1.31, 1.06, -1.11), 8.71e4, 10.41),
-    "spso": ((0.89, 0.12, 1.47, -0.67), 5.52e2, 5.46),
-    "iepso": ((0.9, 1.49, -0.23, 1.17), -16.56, 6.96e-14),
-    "ga": ((0.9, 0.92, 0.84, -1.54), -3.59, 3.06e-4),
-    "de": ((0.9, 0.09, 1.13, -0.09), -2.57, 0.12),
-}
 #: Success: constraint error at most this (m) ...
 SUCCESS_ERROR = 1e-6
 #: ... and motion time at most this fraction above the exact minimum.
@@ -61,7 +52,7 @@ QUICK_GOALS = 8
 #: Swarm size and iteration cap of the paper (Table 4), also given to pyswarms.
 PARTICLES, ITERATIONS = 40, 1000
 #: Constriction coefficients of Clerc and Kennedy (2002) for pyswarms.
-PYSWARMS_OPTIONS = {"c1": 1.49618, "c2": 1.49618, "w": 0.7298}
+PYSWARMS_OPTIONS = {'c1': 1.49618, 'c2': 1.49618, 'w': 0.7298}
 _NO_REWARD = RewardPunishment(reward=False)
 
 
@@ -95,7 +86,7 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
     result = plan(goal, start, arm=arm, mode=mode, algorithm=algorithm, seed=seed,
                   shaping=shaping, options=options)
     if result.joint_goal is None:
-        raise ValueError(f"{algorithm} rejected goal {goal.tolist()}: {result.message}")
+        raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
     return Answer(result.joint_goal[: arm.planned], result)
 
 
@@ -105,7 +96,7 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
     obj = Objective(arm, goal, start, mode=mode)
     # vectorized: x is (planned, S) for a generation and (planned, 1) while polishing
     found = differential_evolution(lambda x: obj(x.T).efficiency, list(zip(obj.lower, obj.upper)),
-                                   vectorized=True, updating="deferred", polish=True,
+                                   vectorized=True, updating='deferred', polish=True,
                                    rng=np.random.default_rng(seed))
     return Answer(np.asarray(found.x))
 
@@ -116,7 +107,7 @@ def _quiet_logging() -> ContextManager:
     Each of pyswarms' modules and objects calls ``logging.config.dictConfig``, which replaces the
     root logger's handlers and opens ./report.log in the working directory.
     """
-    return mock.patch("logging.config.dictConfig")
+    return mock.patch('logging.config.dictConfig')
 
 
 def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int) -> Answer:
@@ -139,24 +130,24 @@ def _methods() -> dict[str, Method]:
     rows = []
     for algorithm in ALGORITHMS:
         label = algorithm.upper()
-        what = ("this package: several swarms and a memetic polish" if algorithm == "iepso"
+        what = ('this package: several swarms and a memetic polish' if algorithm == 'iepso'
                 else "the paper's comparison")
-        rows.append(Method(algorithm, f"{label} ({what}), rewards and punishment",
+        rows.append(Method(algorithm, f'{label} ({what}), rewards and punishment',
                            partial(_core, algorithm, None, None)))
-        rows.append(Method(f"{algorithm}-noreward", f"{label} without the reward (Fig. 10)",
+        rows.append(Method(f'{algorithm}-noreward', f'{label} without the reward (Fig. 10)',
                            partial(_core, algorithm, _NO_REWARD, None)))
-        if algorithm == "iepso":
-            paper = {"polish": False, "swarms": 1}
-            rows.append(Method("iepso-paper", "IEPSO as published: one swarm of 40, no polish",
+        if algorithm == 'iepso':
+            paper = {'polish': False, 'swarms': 1}
+            rows.append(Method('iepso-paper', 'IEPSO as published: one swarm of 40, no polish',
                                partial(_core, algorithm, None, paper)))
-            rows.append(Method("iepso-paper-noreward", "IEPSO as published, without the reward",
+            rows.append(Method('iepso-paper-noreward', 'IEPSO as published, without the reward',
                                partial(_core, algorithm, _NO_REWARD, paper)))
-            rows.append(Method("iepso-nocurve", "IEPSO without the curve search (an ablation)",
-                               partial(_core, algorithm, None, {"curve_search": 0})))
-    rows.append(Method("scipy-de", "scipy.optimize.differential_evolution (vectorized, polish)",
-                       _scipy_de, "scipy"))
-    rows.append(Method("pyswarms", f"pyswarms GlobalBestPSO ({PARTICLES} particles, "
-                       f"{ITERATIONS} iterations)", _pyswarms, "pyswarms"))
+            rows.append(Method('iepso-nocurve', 'IEPSO without the curve search (an ablation)',
+                               partial(_core, algorithm, None, {'curve_search': 0})))
+    rows.append(Method('scipy-de', 'scipy.optimize.differential_evolution (vectorized, polish)',
+                       _scipy_de, 'scipy'))
+    rows.append(Method('pyswarms', f'pyswarms GlobalBestPSO ({PARTICLES} particles, '
+                       f'{ITERATIONS} iterations)', _pyswarms, 'pyswarms'))
     return {m.name: m for m in rows}
 
 
@@ -197,7 +188,7 @@ def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: 
         if np.isfinite(exact.motion_time_s):
             cases.append(Case(goal, start, exact, plan_seed))
     if len(cases) < n:
-        raise ValueError(f"found only {len(cases)} of {n} goals with a {mode.value} solution")
+        raise ValueError(f'found only {len(cases)} of {n} goals with a {mode.value} solution')
     return cases
 
 
@@ -231,7 +222,7 @@ class Results:
 class Progress:
     """Progress on a stream: a redrawn bar on a terminal, a line every 10 % otherwise."""
 
-    def __init__(self, total: int, stream: TextIO | None, unit: str = "goals") -> None:
+    def __init__(self, total: int, stream: TextIO | None, unit: str = 'goals') -> None:
         self.total, self.stream, self.unit = total, stream, unit
         self.done, self.clock = 0, time.perf_counter()
         self.tty = stream is not None and stream.isatty()
@@ -242,13 +233,13 @@ class Progress:
             return
         elapsed = time.perf_counter() - self.clock
         left = elapsed / self.done * (self.total - self.done)
-        text = f"bench: {self.done}/{self.total} {self.unit}, {elapsed:.0f} s, about {left:.0f} s left"
+        text = f'bench: {self.done}/{self.total} {self.unit}, {elapsed:.0f} s, about {left:.0f} s left'
         if self.tty:
             filled = 30 * self.done // self.total
-            end = "\n" if self.done == self.total else ""
+            end = '\n' if self.done == self.total else ''
             self.stream.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] {text}   {end}")
         elif 10 * self.done // self.total > 10 * (self.done - 1) // self.total:
-            self.stream.write(text + "\n")
+            self.stream.write(text + '\n')
         self.stream.flush()
 
 
@@ -290,7 +281,7 @@ class Summary:
 
 def summarise(results: dict[str, Results]) -> list[Summary]:
     """Table rows; the time ratio is each median time over IEPSO's (NaN without an IEPSO row)."""
-    reference = float(np.median(results["iepso"].seconds)) if "iepso" in results else np.nan
+    reference = float(np.median(results['iepso'].seconds)) if 'iepso' in results else np.nan
     return [Summary(name, r.error.size, float(r.success.mean()), float(np.median(r.error)),
                     float(r.error.max()), float(np.median(r.gap)), float(np.median(r.seconds)),
                     float(np.percentile(r.seconds, 99)), float(np.median(r.seconds)) / reference)
@@ -303,30 +294,30 @@ def _table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     lines = []
     for row in (headers, *rows):
         cells = [row[0].ljust(widths[0])] + [c.rjust(w) for c, w in zip(row[1:], widths[1:])]
-        lines.append("  ".join(cells).rstrip())
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
+        lines.append('  '.join(cells).rstrip())
+    lines.insert(1, '  '.join('-' * w for w in widths))
+    return '\n'.join(lines)
 
 
 def _vector(values: np.ndarray, digits: int = 4) -> str:
-    return "(" + ", ".join(f"{v:+.{digits}f}" for v in values) + ")"
+    return '(' + ', '.join(f'{v:+.{digits}f}' for v in values) + ')'
 
 
 def _percent(fraction: float, digits: int) -> str:
     """A signed percentage that never prints as -0."""
-    return f"{round(100 * fraction, digits) + 0.0:+.{digits}f} %"
+    return f'{round(100 * fraction, digits) + 0.0:+.{digits}f} %'
 
 
 def _ratio(value: float) -> str:
-    return "-" if not np.isfinite(value) else f"{value:.1f}x"
+    return '-' if not np.isfinite(value) else f'{value:.1f}x'
 
 
 def format_summary(rows: Sequence[Summary]) -> str:
-    headers = ("method", "success", "median error (m)", "worst error (m)", "median gap",
-               "median time (ms)", "p99 time (ms)", "time / iepso")
-    body = [(s.method, f"{100 * s.success_rate:.1f} %", f"{s.median_error_m:.1e}",
-             f"{s.worst_error_m:.1e}", _percent(s.median_gap, 3), f"{1e3 * s.median_time_s:.1f}",
-             f"{1e3 * s.p99_time_s:.1f}", _ratio(s.time_ratio_to_iepso)) for s in rows]
+    headers = ('method', 'success', 'median error (m)', 'worst error (m)', 'median gap',
+               'median time (ms)', 'p99 time (ms)', 'time / iepso')
+    body = [(s.method, f'{100 * s.success_rate:.1f} %', f'{s.median_error_m:.1e}',
+             f'{s.worst_error_m:.1e}', _percent(s.median_gap, 3), f'{1e3 * s.median_time_s:.1f}',
+             f'{1e3 * s.p99_time_s:.1f}', _ratio(s.time_ratio_to_iepso)) for s in rows]
     return _table(headers, body)
 
 
@@ -337,21 +328,21 @@ def format_failures(results: dict[str, Results], cases: Sequence[Case], limit: i
         failed = np.flatnonzero(~r.success)
         if not failed.size:
             continue
-        lines.append(f"failures of {name} ({failed.size} of {r.error.size}):")
+        lines.append(f'failures of {name} ({failed.size} of {r.error.size}):')
         shown = failed if limit < 0 else failed[:limit]
         for k in shown:
             case = cases[k]
-            lines.append(f"  goal {_vector(case.goal)} m  start {_vector(case.start, 3)} rad  "
-                         f"seed {case.seed}  error {r.error[k]:.2e} m  gap {_percent(r.gap[k], 3)}")
+            lines.append(f'  goal {_vector(case.goal)} m  start {_vector(case.start, 3)} rad  '
+                         f'seed {case.seed}  error {r.error[k]:.2e} m  gap {_percent(r.gap[k], 3)}')
         if shown.size < failed.size:
-            lines.append(f"  ... {failed.size - shown.size} more (--failures -1 lists all, "
-                         "--plans-csv FILE writes every plan)")
-    return "\n".join(lines) if lines else "no failures"
+            lines.append(f'  ... {failed.size - shown.size} more (--failures -1 lists all, '
+                         '--plans-csv FILE writes every plan)')
+    return '\n'.join(lines) if lines else 'no failures'
 
 
 def write_summary_csv(path: str, rows: Sequence[Summary]) -> None:
     fields = list(Summary.__dataclass_fields__)
-    with open(path, "w", newline="", encoding="utf-8") as handle:
+    with open(path, 'w', newline='', encoding='utf-8') as handle:
         writer = csv.writer(handle)
         writer.writerow(fields)
         writer.writerows([getattr(s, f) for f in fields] for s in rows)
@@ -360,11 +351,11 @@ def write_summary_csv(path: str, rows: Sequence[Summary]) -> None:
 def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case]) -> None:
     """One row per plan: the case, the joint goal and how it scored."""
     n_joints, planned = cases[0].start.size, next(iter(results.values())).x.shape[1]
-    header = (["method", "goal_index", "seed", "goal_x_m", "goal_y_m", "goal_z_m"]
-              + [f"start_q{i + 1}_rad" for i in range(n_joints)]
-              + [f"q{i + 1}_rad" for i in range(planned)]
-              + ["error_m", "motion_time_s", "exact_time_s", "gap", "efficiency", "time_s", "success"])
-    with open(path, "w", newline="", encoding="utf-8") as handle:
+    header = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
+              + [f'start_q{i + 1}_rad' for i in range(n_joints)]
+              + [f'q{i + 1}_rad' for i in range(planned)]
+              + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s', 'success'])
+    with open(path, 'w', newline='', encoding='utf-8') as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
         for name, r in results.items():
@@ -376,52 +367,52 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
 
 def _first_below(history: np.ndarray, level: float) -> str:
     hits = np.flatnonzero(history <= level)
-    return str(hits[0] + 1) if hits.size else "never"
+    return str(hits[0] + 1) if hits.size else 'never'
 
 
 def format_paper(results: dict[str, Results], case: Case, arm: ArmModel, mode: Mode) -> str:
     """Table 5 as printed, the same experiment here, and the with/without-reward comparison."""
-    headers = ("algorithm", *(f"q{i + 1}" for i in range(arm.planned)), "F", "error (mm)", "R (s)")
-    printed = [(name, *(f"{v:+.2f}" for v in q), f"{f:.4g}", f"{err:.3g}",
-                f"{np.max(np.abs(q)) / DEFAULT_OMEGA:.3f}")
+    headers = ('algorithm', *(f'q{i + 1}' for i in range(arm.planned)), 'F', 'error (mm)', 'R (s)')
+    printed = [(name, *(f'{v:+.2f}' for v in q), f'{f:.4g}', f'{err:.3g}',
+                f'{np.max(np.abs(q)) / DEFAULT_OMEGA:.3f}')
                for name, (q, f, err) in PAPER_TABLE5.items()]
     exact = case.exact.joint_goal
     f_exact = float(Objective(arm, case.goal, case.start, mode=mode)(exact).efficiency[0])
-    ours = [("exact optimum", *(f"{v:+.4f}" for v in exact), f"{f_exact:.4g}", "0",
-             f"{case.exact_time:.3f}", "+0.00 %", "-")]
-    ours += [(name, *(f"{v:+.4f}" for v in r.x[0]), f"{r.efficiency[0]:.4g}", f"{1e3 * r.error[0]:.3g}",
-              f"{r.motion_time[0]:.3f}", _percent(r.gap[0], 2), f"{1e3 * r.seconds[0]:.1f}")
+    ours = [('exact optimum', *(f'{v:+.4f}' for v in exact), f'{f_exact:.4g}', '0',
+             f'{case.exact_time:.3f}', '+0.00 %', '-')]
+    ours += [(name, *(f'{v:+.4f}' for v in r.x[0]), f'{r.efficiency[0]:.4g}', f'{1e3 * r.error[0]:.3g}',
+              f'{r.motion_time[0]:.3f}', _percent(r.gap[0], 2), f'{1e3 * r.seconds[0]:.1f}')
              for name, r in results.items()]
     eps = RewardPunishment().eps
     levels = (eps, SUCCESS_ERROR, 1e-12)
     reward_rows = []
     for name, r in results.items():
-        if r.plans[0] is None or f"{name}-noreward" not in results:
+        if r.plans[0] is None or f'{name}-noreward' not in results:
             continue
-        for label in (name, f"{name}-noreward"):
+        for label in (name, f'{name}-noreward'):
             res = results[label]
             history = res.plans[0].history_error
             reward_rows.append((label, *(_first_below(history, level) for level in levels),
-                                str(history.size), f"{res.error[0]:.2e}", f"{res.motion_time[0]:.3f}"))
+                                str(history.size), f'{res.error[0]:.2e}', f'{res.motion_time[0]:.3f}'))
     parts = [
-        "Table 5 as printed (Lv et al. 2019; error in mm; "
-        f"R = max|q| / {DEFAULT_OMEGA:g} rad/s from the printed q):",
+        'Table 5 as printed (Lv et al. 2019; error in mm; '
+        f'R = max|q| / {DEFAULT_OMEGA:g} rad/s from the printed q):',
         _table(headers, printed),
-        "",
-        f"This run: the same target from q = 0, seed {case.seed} "
-        "(F of the objective with reward, eq. 9):",
-        _table((*headers, "gap", "time (ms)"), ours),
+        '',
+        f'This run: the same target from q = 0, seed {case.seed} '
+        '(F of the objective with reward, eq. 9):',
+        _table((*headers, 'gap', 'time (ms)'), ours),
     ]
     if reward_rows:
-        parts += ["", "With and without the reward (Fig. 10): "
-                      "first generation with the error at or below",
-                  _table(("method", f"{eps * 1e6:g} um (eps)", "1 um", "1e-12 m", "generations",
-                          "final error (m)", "R (s)"), reward_rows)]
-    return "\n".join(parts)
+        parts += ['', 'With and without the reward (Fig. 10): '
+                      'first generation with the error at or below',
+                  _table(('method', f'{eps * 1e6:g} um (eps)', '1 um', '1e-12 m', 'generations',
+                          'final error (m)', 'R (s)'), reward_rows)]
+    return '\n'.join(parts)
 
 
 def _method_names(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
+    names = [n.strip() for n in text.split(',') if n.strip()]
     unknown = [n for n in names if n not in METHODS]
     if unknown:
         raise argparse.ArgumentTypeError(
@@ -429,43 +420,36 @@ def _method_names(text: str) -> list[str]:
     return names
 
 
-def _count(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
-
-
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    legend = "\n".join(f"  {m.name:<22}{m.description}" for m in METHODS.values())
+    legend = '\n'.join(f'  {m.name:<22}{m.description}' for m in METHODS.values())
     p = sub.add_parser(
-        "bench", help="compare IEPSO with PSO, SPSO, GA, DE, scipy and pyswarms on random goals",
+        'bench', help='compare IEPSO with PSO, SPSO, GA, DE, scipy and pyswarms on random goals',
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Run every method on the same seeded random goals and starts with the same "
-                    "objective F. Success: error <= 1 um and motion time within 0.1 % of the exact "
-                    "minimum. Time per plan: wall time of the call.",
-        epilog="methods:\n" + legend)
-    p.add_argument("--paper", action="store_true",
+        description='Run every method on the same seeded random goals and starts with the same '
+                    'objective F. Success: error <= 1 um and motion time within 0.1 % of the exact '
+                    'minimum. Time per plan: wall time of the call.',
+        epilog='methods:\n' + legend)
+    p.add_argument('--paper', action='store_true',
                    help="the paper's experiment (its target from q = 0) laid out like Table 5, "
-                        "and Fig. 10")
-    p.add_argument("--runs", type=_count, default=1, metavar="N",
-                   help="with --paper: repeat with seeds SEED..SEED+N-1 (default 1)")
-    p.add_argument("--quick", action="store_true", help=f"{QUICK_GOALS} goals (unless --goals is given)")
-    p.add_argument("--goals", type=_count, metavar="N",
-                   help=f"number of goals (default {DEFAULT_GOALS})")
-    p.add_argument("--algorithms", type=_method_names, nargs="+", metavar="NAME",
-                   help="methods to run, by name, comma or space separated (default: all)")
-    p.add_argument("--mode", choices=[m.value for m in Mode], default=Mode.FREE.value)
-    p.add_argument("--random-starts", action="store_true",
-                   help="start from random in-limit configurations instead of q = 0")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the goals, starts and plans (default 0)")
-    p.add_argument("--csv", metavar="FILE", help="also write the table as CSV")
-    p.add_argument("--plans-csv", metavar="FILE",
-                   help="write every plan (goal, start, answer, score) as CSV")
-    p.add_argument("--failures", type=int, default=10, metavar="N",
-                   help="failed plans listed per method (default 10, -1 for all)")
-    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+                        'and Fig. 10')
+    p.add_argument('--runs', type=positive_count, default=1, metavar='N',
+                   help='with --paper: repeat with seeds SEED..SEED+N-1 (default 1)')
+    p.add_argument('--quick', action='store_true', help=f'{QUICK_GOALS} goals (unless --goals is given)')
+    p.add_argument('--goals', type=positive_count, metavar='N',
+                   help=f'number of goals (default {DEFAULT_GOALS})')
+    p.add_argument('--algorithms', type=_method_names, nargs='+', metavar='NAME',
+                   help='methods to run, by name, comma or space separated (default: all)')
+    p.add_argument('--mode', choices=[m.value for m in Mode], default=Mode.FREE.value)
+    p.add_argument('--random-starts', action='store_true',
+                   help='start from random in-limit configurations instead of q = 0')
+    p.add_argument('--seed', type=int, default=0,
+                   help='seed of the goals, starts and plans (default 0)')
+    p.add_argument('--csv', metavar='FILE', help='also write the table as CSV')
+    p.add_argument('--plans-csv', metavar='FILE',
+                   help='write every plan (goal, start, answer, score) as CSV')
+    p.add_argument('--failures', type=int, default=10, metavar='N',
+                   help='failed plans listed per method (default 10, -1 for all)')
+    p.add_argument('--quiet', action='store_true', help='no progress on stderr')
     p.set_defaults(run=_run)
 
 
@@ -474,35 +458,35 @@ def _run(args: argparse.Namespace) -> int:
     wanted = {n for group in args.algorithms for n in group} if args.algorithms else set(METHODS)
     chosen = [n for n in METHODS if n in wanted]
     methods = [METHODS[n] for n in chosen if METHODS[n].available]
-    notes = [f"{METHODS[n].name}: {METHODS[n].requires} is not installed, skipped "
+    notes = [f'{METHODS[n].name}: {METHODS[n].requires} is not installed, skipped '
              f"(pip install {METHODS[n].requires}, or the package's 'bench' extra)"
              for n in chosen if not METHODS[n].available]
     if not methods:
-        raise UsageError("none of the chosen methods can run here: " + "; ".join(notes))
+        raise UsageError('none of the chosen methods can run here: ' + '; '.join(notes))
     with _quiet_logging():                 # import the peers now, not inside the first timed call
         for m in methods:
             if m.requires:
                 importlib.import_module(m.requires)
     if args.paper:
         if args.goals or args.quick or args.random_starts:
-            raise UsageError("--paper is one fixed target: use --runs, not --goals, --quick or "
-                             "--random-starts")
+            raise UsageError('--paper is one fixed target: use --runs, not --goals, --quick or '
+                             '--random-starts')
         first = paper_case(arm, mode, args.seed)
         cases = [replace(first, seed=args.seed + r) for r in range(args.runs)]
         print(f"trajplan bench --paper: the paper's target {_vector(PAPER_TARGET, 6)} m from q = 0, "
-              f"{mode.value} mode, {args.runs} run(s) with seeds {args.seed}..{args.seed + args.runs - 1}.")
+              f'{mode.value} mode, {args.runs} run(s) with seeds {args.seed}..{args.seed + args.runs - 1}.')
     else:
         if args.runs != 1:
-            raise UsageError("--runs goes with --paper; on random goals use --goals")
+            raise UsageError('--runs goes with --paper; on random goals use --goals')
         n = args.goals or (QUICK_GOALS if args.quick else DEFAULT_GOALS)
         cases = draw_cases(arm, n, mode=mode, random_starts=args.random_starts, seed=args.seed)
-        starts = "random in-limit starts" if args.random_starts else "starts upright (q = 0)"
+        starts = 'random in-limit starts' if args.random_starts else 'starts upright (q = 0)'
         print(f"trajplan bench: {n} goal{'s' * (n != 1)}, {mode.value} mode, {starts}, seed {args.seed}; "
-              "every method gets the same goals, starts and seeds.")
-    print(f"success = error <= {SUCCESS_ERROR:g} m and motion time within {100 * SUCCESS_GAP:g} % of "
-          "the exact minimum; time = wall time per plan.\n")
+              'every method gets the same goals, starts and seeds.')
+    print(f'success = error <= {SUCCESS_ERROR:g} m and motion time within {100 * SUCCESS_GAP:g} % of '
+          'the exact minimum; time = wall time per plan.\n')
     progress = Progress(len(cases), None if args.quiet else sys.stderr,
-                        "runs" if args.paper else "goals")
+                        'runs' if args.paper else 'goals')
     results = run(methods, cases, arm, mode, progress)
     if args.paper:
         print(format_paper(results, cases[0], arm, mode))

@@ -43,11 +43,11 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.utilities import get_rmw_implementation_identifier
 
-from .arm import paper_arm
-from .demo import PlannerProcess, ros_environment
-from .planner import plan
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.tools.demo import PlannerProcess, ros_environment
+from trajplan_ros.planning.planner import plan
 
-__all__ = ["main"]
+__all__ = ['main']
 
 #: The targets of issue 3.
 MAX_MEDIAN_OVERHEAD_S = 5e-3
@@ -58,7 +58,7 @@ TIMEOUT_S = 120.0
 
 def _fmt(xyz: Sequence[float]) -> str:
     """A point as the node writes it in its log lines."""
-    return "(" + ", ".join(f"{v:.6g}" for v in xyz) + ")"
+    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
 
 
 def _goals(count: int, seed: int) -> np.ndarray:
@@ -78,7 +78,7 @@ def _pct(values: Sequence[float], q: float) -> float:
 
 
 def _ms(seconds: float) -> str:
-    return f"{1e3 * seconds:.2f} ms"
+    return f'{1e3 * seconds:.2f} ms'
 
 
 class _Client:
@@ -87,7 +87,7 @@ class _Client:
     def __init__(self) -> None:
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
-        self.node = Node("trajplan_bench", context=self.context)
+        self.node = Node('trajplan_bench', context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
@@ -139,21 +139,21 @@ def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
         request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
         answer, trip = ros.call(client, request)
         if answer is None:
-            return f"no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}"
+            return f'no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}'
         trips.append(trip)
         sizes.append(len(answer.plan.poses))
         if idle or i == len(goals) - 1:
-            node.wait_for(rf"service call #\d+ {re.escape(_fmt(goal))} m from ", timeout=TIMEOUT_S)
+            node.wait_for(rf'service call #\d+ {re.escape(_fmt(goal))} m from ', timeout=TIMEOUT_S)
     logged = {m.group(1): float(m.group(2)) / 1e3 for m in node.matches(
-        r"service call #\d+ (\([^)]*\)) m from .*; planned in ([0-9.]+) ms")}
+        r'service call #\d+ (\([^)]*\)) m from .*; planned in ([0-9.]+) ms')}
     return trips, [logged[_fmt(g)] for g in goals], sizes
 
 
 def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
                    more_goals: np.ndarray) -> tuple[bool, list[str]]:
-    client = ros.node.create_client(GetPlan, "plan_trajectory")
+    client = ros.node.create_client(GetPlan, 'plan_trajectory')
     if not client.wait_for_service(timeout_sec=TIMEOUT_S):
-        return False, ["no plan_trajectory service"]
+        return False, ['no plan_trajectory service']
     single = _calls(node, ros, client, goals, idle=True)
     if isinstance(single, str):
         return False, [single]
@@ -163,18 +163,18 @@ def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     planned = np.flatnonzero(sizes)
     per_pose, fixed = np.polyfit(np.take(sizes, planned), overhead[planned], 1)
     lines = [
-        f"service: {len(goals)} plan_trajectory calls, each to an idle node, {planned.size} "
-        f"with a plan, {len(goals) - planned.size} empty (goal not reached)",
-        f"  round trip (client)          median {_ms(statistics.median(trips))}, "
-        f"p90 {_ms(_pct(trips, 90))}",
-        f"  plan time (node, logged)     median {_ms(statistics.median(plans))}, "
-        f"p90 {_ms(_pct(plans, 90))}",
-        f"  overhead = round trip - plan median {_ms(statistics.median(overhead))}, "
-        f"p90 {_ms(_pct(overhead, 90))}, max {_ms(max(overhead))} "
+        f'service: {len(goals)} plan_trajectory calls, each to an idle node, {planned.size} '
+        f'with a plan, {len(goals) - planned.size} empty (goal not reached)',
+        f'  round trip (client)          median {_ms(statistics.median(trips))}, '
+        f'p90 {_ms(_pct(trips, 90))}',
+        f'  plan time (node, logged)     median {_ms(statistics.median(plans))}, '
+        f'p90 {_ms(_pct(plans, 90))}',
+        f'  overhead = round trip - plan median {_ms(statistics.median(overhead))}, '
+        f'p90 {_ms(_pct(overhead, 90))}, max {_ms(max(overhead))} '
         f"(target: median <= {_ms(MAX_MEDIAN_OVERHEAD_S)}): {'met' if met else 'NOT MET'}",
-        f"  path: median {statistics.median(np.take(sizes, planned)):g} poses (range "
-        f"{min(np.take(sizes, planned))}..{max(sizes)}, one per sample period of motion); "
-        f"overhead ~ {_ms(fixed)} + {1e6 * per_pose:.1f} us per pose (least squares)",
+        f'  path: median {statistics.median(np.take(sizes, planned)):g} poses (range '
+        f'{min(np.take(sizes, planned))}..{max(sizes)}, one per sample period of motion); '
+        f'overhead ~ {_ms(fixed)} + {1e6 * per_pose:.1f} us per pose (least squares)',
     ]
     burst = _calls(node, ros, client, more_goals, idle=False)
     if isinstance(burst, str):
@@ -182,33 +182,33 @@ def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     trips, plans, _ = burst
     overhead = np.subtract(trips, plans)
     lines.append(
-        f"  back to back ({len(more_goals)} more calls, each sent when the last answer arrives, "
-        f"so it also waits while the node publishes and logs the last plan): overhead median "
-        f"{_ms(statistics.median(overhead))}, p90 {_ms(_pct(overhead, 90))}")
+        f'  back to back ({len(more_goals)} more calls, each sent when the last answer arrives, '
+        f'so it also waits while the node publishes and logs the last plan): overhead median '
+        f'{_ms(statistics.median(overhead))}, p90 {_ms(_pct(overhead, 90))}')
     return met, lines
 
 
 def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
     """The goals (numbered from 1 in sending order) neither planned nor dropped, if any."""
-    lost = [f"#{i} {_fmt(g)}" for i, g in enumerate(goals, 1) if _fmt(g) not in settled]
-    return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ""
+    lost = [f'#{i} {_fmt(g)}' for i, g in enumerate(goals, 1) if _fmt(g) not in settled]
+    return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ''
 
 
 def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
                   rate: float) -> tuple[bool, list[str]]:
     # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
     # when a shorter history is full
-    publisher = ros.node.create_publisher(Point, "goal", len(goals))
-    params = ros.node.create_client(GetParameters, "trajplan/get_parameters")
+    publisher = ros.node.create_publisher(Point, 'goal', len(goals))
+    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters')
     if not params.wait_for_service(timeout_sec=TIMEOUT_S):
-        return False, ["no parameter service"]
+        return False, ['no parameter service']
     # warm up: until the node has logged a goal from this publisher (refused at once), the two
     # sides may not have matched each other yet, and a first sample could be lost
     deadline = time.monotonic() + TIMEOUT_S
-    nan = float("nan")
-    while not node.matches(r"\]: goal #\d+ \(nan, nan, nan\) m from ") and time.monotonic() < deadline:
+    nan = float('nan')
+    while not node.matches(r'\]: goal #\d+ \(nan, nan, nan\) m from ') and time.monotonic() < deadline:
         publisher.publish(Point(x=nan, y=nan, z=nan))
-        ros.call(params, GetParameters.Request(names=["angular_velocity"]))
+        ros.call(params, GetParameters.Request(names=['angular_velocity']))
         threading.Event().wait(0.05)
     wanted = {_fmt(g) for g in goals}
     settled: dict[str, str] = {}
@@ -216,10 +216,10 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     stop = threading.Event()
 
     def poll_parameters() -> None:
-        request = GetParameters.Request(names=["angular_velocity"])
+        request = GetParameters.Request(names=['angular_velocity'])
         while not stop.is_set():
             answer, trip = ros.call(params, request)
-            latencies.append(trip if answer is not None else float("inf"))
+            latencies.append(trip if answer is not None else float('inf'))
             stop.wait(0.01)
 
     poller = threading.Thread(target=poll_parameters, daemon=True)
@@ -231,10 +231,10 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     sent = time.perf_counter() - began
 
     def accounted() -> bool:
-        for m in node.matches(r"\]: goal #\d+ (\([^)]*\)) m from "):
-            settled.setdefault(m.group(1), "planned")
-        for m in node.matches(r"\]: dropped goal #\d+ (\([^)]*\)) m: "):
-            settled.setdefault(m.group(1), "dropped")
+        for m in node.matches(r'\]: goal #\d+ (\([^)]*\)) m from '):
+            settled.setdefault(m.group(1), 'planned')
+        for m in node.matches(r'\]: dropped goal #\d+ (\([^)]*\)) m: '):
+            settled.setdefault(m.group(1), 'dropped')
         return wanted <= settled.keys()
 
     deadline = time.monotonic() + TIMEOUT_S
@@ -243,34 +243,34 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     stop.set()
     poller.join(timeout=TIMEOUT_S)
 
-    planned = sum(1 for g in wanted if settled.get(g) == "planned")
-    dropped = sum(1 for g in wanted if settled.get(g) == "dropped")
+    planned = sum(1 for g in wanted if settled.get(g) == 'planned')
+    dropped = sum(1 for g in wanted if settled.get(g) == 'dropped')
     missing = len(wanted) - planned - dropped
-    published = len([m for m in node.matches(r"\]: goal #\d+ (\([^)]*\)) m from .*; published")
+    published = len([m for m in node.matches(r'\]: goal #\d+ (\([^)]*\)) m from .*; published')
                      if m.group(1) in wanted])
     worst = max(latencies)
     all_met = missing == 0 and worst <= MAX_PARAMETER_LATENCY_S
     lines = [
-        f"goal stream: {len(goals)} goals on goal at {rate:g} Hz (sent in {sent:.2f} s)",
-        f"  planned {planned} ({published} reached and published), dropped {dropped} (each "
-        f"logged), unaccounted {missing}{_missing(goals, settled)}: "
+        f'goal stream: {len(goals)} goals on goal at {rate:g} Hz (sent in {sent:.2f} s)',
+        f'  planned {planned} ({published} reached and published), dropped {dropped} (each '
+        f'logged), unaccounted {missing}{_missing(goals, settled)}: '
         f"{'met' if missing == 0 else 'NOT MET'}",
-        f"  parameter get every 10 ms meanwhile: {len(latencies)} sent, "
-        f"{sum(np.isfinite(latencies))} answered, median "
-        f"{_ms(statistics.median(latencies))}, p99 {_ms(_pct(latencies, 99))}, max {_ms(worst)} "
-        f"(target: max <= {_ms(MAX_PARAMETER_LATENCY_S)}): "
+        f'  parameter get every 10 ms meanwhile: {len(latencies)} sent, '
+        f'{sum(np.isfinite(latencies))} answered, median '
+        f'{_ms(statistics.median(latencies))}, p99 {_ms(_pct(latencies, 99))}, max {_ms(worst)} '
+        f'(target: max <= {_ms(MAX_PARAMETER_LATENCY_S)}): '
         f"{'met' if worst <= MAX_PARAMETER_LATENCY_S else 'NOT MET'}",
     ]
     return all_met, lines
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m trajplan_ros.bench_node",
-                                     description=__doc__.split("\n\n")[0])
-    parser.add_argument("--calls", type=int, default=100, help="service calls (default 100)")
-    parser.add_argument("--goals", type=int, default=200, help="streamed goals (default 200)")
-    parser.add_argument("--rate", type=float, default=100.0, help="goal rate, Hz (default 100)")
-    parser.add_argument("--seed", type=int, default=3, help="seed of the goals (default 3)")
+    parser = argparse.ArgumentParser(prog='python -m trajplan_ros.bench_node',
+                                     description=__doc__.split('\n\n')[0])
+    parser.add_argument('--calls', type=int, default=100, help='service calls (default 100)')
+    parser.add_argument('--goals', type=int, default=200, help='streamed goals (default 200)')
+    parser.add_argument('--rate', type=float, default=100.0, help='goal rate, Hz (default 100)')
+    parser.add_argument('--seed', type=int, default=3, help='seed of the goals (default 3)')
     args = parser.parse_args(argv)
 
     call_goals = _goals(args.calls, args.seed)
@@ -279,28 +279,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     here = _in_process(call_goals)
     env = ros_environment()
     os.environ.update(env)
-    print(f"planner_node benchmark: python -m trajplan_ros.bench_node "
+    print(f'planner_node benchmark: python -m trajplan_ros.bench_node '
           f"{' '.join(argv if argv is not None else sys.argv[1:])}".rstrip())
-    print(f"machine: {platform.machine()}, {os.cpu_count()} CPUs, Python "
-          f"{platform.python_version()}, {get_rmw_implementation_identifier()}")
+    print(f'machine: {platform.machine()}, {os.cpu_count()} CPUs, Python '
+          f'{platform.python_version()}, {get_rmw_implementation_identifier()}')
     node = PlannerProcess(env=env)
     ros = _Client()
     try:
         met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
-        print("\n".join(service_lines[:5]))
-        print(f"  plan() in this process on the same goals from the same starts: median "
-              f"{_ms(statistics.median(here))}, p90 {_ms(_pct(here, 90))}")
-        print("\n".join(service_lines[5:]))
+        print('\n'.join(service_lines[:5]))
+        print(f'  plan() in this process on the same goals from the same starts: median '
+              f'{_ms(statistics.median(here))}, p90 {_ms(_pct(here, 90))}')
+        print('\n'.join(service_lines[5:]))
         met_stream, stream_lines = _stream_phase(node, ros, stream_goals, args.rate)
-        print("\n".join(stream_lines))
+        print('\n'.join(stream_lines))
     finally:
         ros.close()
         code = node.stop()
-    if code != 0 or any("Traceback" in line for line in node.lines):
-        print(f"planner_node exited with {code}:\n" + "\n".join(node.lines[-20:]))
+    if code != 0 or any('Traceback' in line for line in node.lines):
+        print(f'planner_node exited with {code}:\n' + '\n'.join(node.lines[-20:]))
         return 1
     return 0 if met_service and met_stream else 1
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     sys.exit(main())

@@ -34,29 +34,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["RewardPunishment", "RULE_TABLE", "OUTPUT_LEVELS", "gaussian", "bell", "sigmoid",
-           "linear_membership"]
+__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'gaussian', 'bell', 'sigmoid',
+           'linear_membership']
 
 #: Output levels of Table 1, as degrees of reward (+) or punishment (-) in [-1, 1].
 OUTPUT_LEVELS: dict[str, float] = {
-    "VSP": -1.0, "VVP": -0.75, "RSP": -0.5, "RLP": -0.25,
-    "NRP": 0.0, "RLR": 0.25, "RSR": 0.5, "VSR": 1.0,
+    'VSP': -1.0, 'VVP': -0.75, 'RSP': -0.5, 'RLP': -0.25,
+    'NRP': 0.0, 'RLR': 0.25, 'RSR': 0.5, 'VSR': 1.0,
 }
 #: Table 1: rows are the second input (H, M, L), columns the closeness of the error
 #: (VF, SF, LF, LC, BE, ZC, SC, VC). The paper prints "NPR" for NRP.
 RULE_TABLE: dict[str, tuple[str, ...]] = {
-    "H": ("VSP", "VSP", "VSP", "RSP", "NRP", "RLR", "RLR", "RSR"),
-    "M": ("VSP", "VVP", "VVP", "RSP", "NRP", "RLR", "RLR", "RSR"),
-    "L": ("VSP", "VVP", "RSP", "RSP", "NRP", "RLR", "RSR", "VSR"),
+    'H': ('VSP', 'VSP', 'VSP', 'RSP', 'NRP', 'RLR', 'RLR', 'RSR'),
+    'M': ('VSP', 'VVP', 'VVP', 'RSP', 'NRP', 'RLR', 'RLR', 'RSR'),
+    'L': ('VSP', 'VVP', 'RSP', 'RSP', 'NRP', 'RLR', 'RSR', 'VSR'),
 }
 #: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the L, M, H sets on tau.
 #: The rule base is evaluated in single precision (see ``RewardPunishment.rule_degree``).
 _SINGLE = np.float32
 _CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]).astype(_SINGLE)
-_TIME_CENTRES = {"L": 0.0, "M": 0.5, "H": 1.0}
+_TIME_CENTRES = {'L': 0.0, 'M': 0.5, 'H': 1.0}
 _SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]]
-                        for row in ("H", "M", "L")]).astype(_SINGLE)
-_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ("H", "M", "L")]).astype(_SINGLE)
+                        for row in ('H', 'M', 'L')]).astype(_SINGLE)
+_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ('H', 'M', 'L')]).astype(_SINGLE)
 _ONES = np.ones(_SINGLETONS.size, dtype=_SINGLE)
 
 
@@ -100,7 +100,7 @@ class RewardPunishment:
     k: float = 10000.0
     j: float = 3.0
     err_max: float | None = None
-    lambda_scale: str = "log"
+    lambda_scale: str = 'log'
     fuzzy_rules: bool = True
     reward: bool = True
     sigma: float = 0.15
@@ -108,19 +108,19 @@ class RewardPunishment:
     def __post_init__(self) -> None:
         values = (self.eps, self.s, self.k, self.j, self.sigma)
         if not all(np.isfinite(v) and v > 0 for v in values):
-            raise ValueError("eps, s, k, j and sigma must be finite and positive")
+            raise ValueError('eps, s, k, j and sigma must be finite and positive')
         if not self.s < self.eps:
-            raise ValueError(f"s ({self.s}) must be below eps ({self.eps})")
+            raise ValueError(f's ({self.s}) must be below eps ({self.eps})')
         if self.err_max is not None and not (np.isfinite(self.err_max) and self.err_max > self.eps):
-            raise ValueError(f"err_max must be finite and above eps, got {self.err_max}")
-        if self.lambda_scale not in ("log", "linear"):
+            raise ValueError(f'err_max must be finite and above eps, got {self.err_max}')
+        if self.lambda_scale not in ('log', 'linear'):
             raise ValueError(f"lambda_scale must be 'log' or 'linear', got {self.lambda_scale!r}")
 
     def closeness(self, err: np.ndarray, err_max: float) -> np.ndarray:
         """Eq. (15): the degree lambda in [-1, 1] to which the error approaches zero."""
         err = np.asarray(err, dtype=float)
         reward_side = 1.0 - err / self.eps
-        if self.lambda_scale == "linear":
+        if self.lambda_scale == 'linear':
             punish_side = -(err - self.eps) / (err_max - self.eps)
         else:
             ratio = np.maximum(err, self.eps) / self.eps

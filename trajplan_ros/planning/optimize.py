@@ -5,9 +5,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .objective import Objective
+from trajplan_ros.planning.objective import Objective
 
-__all__ = ["OptimizeResult", "History", "initial_population"]
+__all__ = ['OptimizeResult', 'History', 'initial_population']
 
 
 @dataclass

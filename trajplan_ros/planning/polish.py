@@ -29,9 +29,9 @@ from typing import Callable
 
 import numpy as np
 
-from .objective import Objective
+from trajplan_ros.planning.objective import Objective
 
-__all__ = ["polish", "curve_minima"]
+__all__ = ['polish', 'curve_minima']
 
 _TIE = 1e-12
 
@@ -64,7 +64,7 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
     qa = np.concatenate((at[iu] - at[ju], at[iu] + at[ju], at))
     qb = np.concatenate((nt[iu] - nt[ju], nt[iu] + nt[ju], nt))
     qc = np.concatenate((bt[iu] - bt[ju], bt[iu] + bt[ju], bt))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide='ignore', invalid='ignore'):
         cand = np.concatenate((*_roots(qa, qb, qc), -nt / (2.0 * at), zlo[None], zhi[None],
                                np.zeros((1, b.shape[0]))))                # (C, K)
     cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo, zhi)
@@ -106,7 +106,7 @@ class _Linearisation:
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
         self.error = obj.residual_norm(self.c)
-        self.merit = self.time * obj.omega + weight * np.sqrt(np.einsum("kr,kr->k", self.c, self.c))
+        self.merit = self.time * obj.omega + weight * np.sqrt(np.einsum('kr,kr->k', self.c, self.c))
         jac = np.concatenate((d.jp, d.ju[:, 2:3]), axis=1) if obj.radial else d.jp
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)
@@ -121,9 +121,9 @@ class _Linearisation:
         else:
             projector = np.eye(dim) - self.pinv @ jac
             if free == 1:
-                col = np.argmax(np.einsum("kij,kij->kj", projector, projector), axis=1)
+                col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
                 n = projector[np.arange(k), :, col]
-                self.null = (n / np.sqrt(np.einsum("ki,ki->k", n, n))[:, None])[:, None, :]
+                self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
             else:
                 self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
         self.half_curv = np.zeros_like(self.null)
@@ -136,9 +136,9 @@ class _Linearisation:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
         return -(self.pinv @ res[:, :, None])[:, :, 0]
 
-    def keep(self, other: "_Linearisation", mask: np.ndarray) -> None:
+    def keep(self, other: '_Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
-        for name in ("c", "time", "error", "merit", "pinv", "null", "half_curv"):
+        for name in ('c', 'time', 'error', 'merit', 'pinv', 'null', 'half_curv'):
             mine, theirs = getattr(self, name), getattr(other, name)
             mine[mask] = theirs[mask]
 
@@ -164,12 +164,12 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     live = np.ones(k, dtype=bool)
     for _ in range(max_steps):
         step = here.newton(here.c)
-        size = np.sqrt(np.einsum("km,km->k", step, step))
+        size = np.sqrt(np.einsum('km,km->k', step, step))
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
         for j in range(here.null.shape[1]):
             direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
-            with np.errstate(divide="ignore", invalid="ignore"):       # the joint limits along z
+            with np.errstate(divide='ignore', invalid='ignore'):       # the joint limits along z
                 a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
             moving = np.abs(direction) > 1e-15
             zlo = functools.reduce(np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -delta)
@@ -180,7 +180,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         trial = np.clip(base, lo, hi)
         trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)   # second-order correction
         there = _Linearisation(obj, trial, weight)
-        moved = np.einsum("km,km->k", trial - x, trial - x)
+        moved = np.einsum('km,km->k', trial - x, trial - x)
         accept = live & (there.merit < here.merit)
         x[accept] = trial[accept]
         here.keep(there, accept)
@@ -207,7 +207,7 @@ def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarra
         ends = ends + direction * step
         here = _Linearisation(obj, ends, 1.0, curvature=False)
         ends = ends + here.newton(here.c)
-        turn = np.sign(np.einsum("ki,ki->k", here.null[:, 0, :], direction))
+        turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
         direction = here.null[:, 0, :] * turn[:, None]
         path.append(np.mod(ends + np.pi, 2 * np.pi) - np.pi)
     return np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))

@@ -2,7 +2,7 @@
 
 Each joint i has standard DH parameters (a_i, alpha_i, d_i) and its DH angle is
 ``theta_i = sign_i * q_i + offset_i``, where q is the joint angle a user commands. The paper's
-arm needs this mapping (see ``paper_arm``): its q = 0 is the upright pose. Units are SI
+arm needs this mapping (see ``kinematics.paper_arm``): its q = 0 is the upright pose. Units are SI
 (metres, radians), REP 103.
 
 Forward kinematics is vectorised over an (N, n_joints) array of configurations.
@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["ArmModel", "InvalidArmModel", "ToolJacobian", "paper_arm"]
+__all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
 
 
 class InvalidArmModel(ValueError):
@@ -24,9 +24,9 @@ class InvalidArmModel(ValueError):
 def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     if arr.shape != (n,):
-        raise InvalidArmModel(f"{name} needs {n} values, got shape {arr.shape}")
+        raise InvalidArmModel(f'{name} needs {n} values, got shape {arr.shape}')
     if not np.all(np.isfinite(arr)):
-        raise InvalidArmModel(f"{name} has a non-finite value: {arr.tolist()}")
+        raise InvalidArmModel(f'{name} has a non-finite value: {arr.tolist()}')
     return arr
 
 
@@ -80,7 +80,7 @@ class ToolJacobian:
         a -= turned
         jac = self.columns[:, :, :2]
         cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]          # coordinates first
-        second = np.einsum("cikn,in->ckn", cross, n.T)                 # (3, 2, N)
+        second = np.einsum('cikn,in->ckn', cross, n.T)                 # (3, 2, N)
         return second[:, 0].T, second[:, 1].T
 
 
@@ -120,33 +120,33 @@ class ArmModel:
                  joint_names: Sequence[str] | None = None, planned: int | None = None) -> None:
         n = len(a)
         if n == 0:
-            raise InvalidArmModel("the arm has no joints")
+            raise InvalidArmModel('the arm has no joints')
         put = object.__setattr__
-        put(self, "a", _vector("a", a, n))
-        put(self, "alpha", _vector("alpha", alpha, n))
-        put(self, "d", _vector("d", d, n))
-        put(self, "sign", _vector("sign", np.ones(n) if sign is None else sign, n))
-        put(self, "offset", _vector("offset", np.zeros(n) if offset is None else offset, n))
-        put(self, "lower", _vector("lower", lower, n))
-        put(self, "upper", _vector("upper", upper, n))
+        put(self, 'a', _vector('a', a, n))
+        put(self, 'alpha', _vector('alpha', alpha, n))
+        put(self, 'd', _vector('d', d, n))
+        put(self, 'sign', _vector('sign', np.ones(n) if sign is None else sign, n))
+        put(self, 'offset', _vector('offset', np.zeros(n) if offset is None else offset, n))
+        put(self, 'lower', _vector('lower', lower, n))
+        put(self, 'upper', _vector('upper', upper, n))
         if not np.all(np.abs(self.sign) == 1.0):
-            raise InvalidArmModel(f"sign must be +1 or -1 per joint, got {self.sign.tolist()}")
+            raise InvalidArmModel(f'sign must be +1 or -1 per joint, got {self.sign.tolist()}')
         bad = np.flatnonzero(self.lower > self.upper)
         if bad.size:
             i = int(bad[0])
             raise InvalidArmModel(
-                f"joint {i + 1}: lower limit {self.lower[i]} is above upper limit {self.upper[i]}")
+                f'joint {i + 1}: lower limit {self.lower[i]} is above upper limit {self.upper[i]}')
         names = tuple(joint_names) if joint_names is not None else tuple(
-            f"joint{i + 1}" for i in range(n))
+            f'joint{i + 1}' for i in range(n))
         if len(names) != n or len(set(names)) != n or not all(isinstance(s, str) and s for s in names):
-            raise InvalidArmModel(f"joint_names must be {n} distinct non-empty names, got {list(names)}")
-        put(self, "joint_names", names)
+            raise InvalidArmModel(f'joint_names must be {n} distinct non-empty names, got {list(names)}')
+        put(self, 'joint_names', names)
         planned = n if planned is None else int(planned)
         if not 2 <= planned <= min(n, 7):
-            raise InvalidArmModel(f"planned joints must be between 2 and {min(n, 7)}, got {planned}")
-        put(self, "planned", planned)
-        put(self, "_cos_alpha", np.cos(self.alpha))
-        put(self, "_sin_alpha", np.sin(self.alpha))
+            raise InvalidArmModel(f'planned joints must be between 2 and {min(n, 7)}, got {planned}')
+        put(self, 'planned', planned)
+        put(self, '_cos_alpha', np.cos(self.alpha))
+        put(self, '_sin_alpha', np.sin(self.alpha))
 
     @property
     def n_joints(self) -> int:
@@ -264,26 +264,3 @@ class ArmModel:
         for i in range(self.n_joints):
             out[:, i + 1] = out[:, i] @ link[:, i]
         return out
-
-
-def paper_arm() -> ArmModel:
-    """The arm of Lv et al. 2019 in SI units (Table 3 in metres, Table 4 limits).
-
-    DH (a, alpha, d): (0.010, -90deg, 0), (0.104, 0, 0), (0.096, 0, 0), (0.027, +90deg, 0),
-    (0, 0, 0.137). With theta = sign * q + offset, sign = (1, 1, 1, -1, 1) and
-    offset = (0, -90deg, 0, +90deg, 0) (NOTES.md), q = 0 is the upright pose with the tool at
-    (0.037, 0, 0.337) m and Table 5's IEPSO answer lands on the paper's target. Joints 1-4 are
-    planned; joint 5 spins the tool about its own axis and is held.
-    """
-    deg = np.pi / 180.0
-    return ArmModel(
-        a=[0.010, 0.104, 0.096, 0.027, 0.0],
-        alpha=[-90 * deg, 0.0, 0.0, 90 * deg, 0.0],
-        d=[0.0, 0.0, 0.0, 0.0, 0.137],
-        sign=[1, 1, 1, -1, 1],
-        offset=[0.0, -90 * deg, 0.0, 90 * deg, 0.0],
-        lower=np.array([-135, -90, -135, -135, -180]) * deg,
-        upper=np.array([135, 90, 135, 90, 180]) * deg,
-        joint_names=[f"joint{i}" for i in range(1, 6)],
-        planned=4,
-    )

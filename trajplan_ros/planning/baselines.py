@@ -18,10 +18,10 @@ from typing import Callable
 
 import numpy as np
 
-from .objective import Objective
-from .optimize import History, OptimizeResult, initial_population
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.optimize import History, OptimizeResult, initial_population
 
-__all__ = ["pso", "spso", "ga", "de"]
+__all__ = ['pso', 'spso', 'ga', 'de']
 
 _PATIENCE = 50
 
@@ -32,7 +32,7 @@ class _Run:
     def __init__(self, obj: Objective, population: int, max_iter: int, tol: float,
                  seed: int | np.random.Generator | None) -> None:
         if population < 4 or max_iter < 1:
-            raise ValueError("population must be >= 4 and max_iter >= 1")
+            raise ValueError('population must be >= 4 and max_iter >= 1')
         self.obj, self.rng = obj, np.random.default_rng(seed)
         self.lo, self.hi = obj.lower, obj.upper
         self.history = History(max_iter, tol, _PATIENCE, obj.shaping.eps)

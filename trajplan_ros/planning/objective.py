@@ -19,10 +19,10 @@ from enum import Enum
 
 import numpy as np
 
-from .arm import ArmModel, ToolJacobian
-from .fuzzy import RewardPunishment
+from trajplan_ros.kinematics import ArmModel, ToolJacobian
+from trajplan_ros.planning.fuzzy import RewardPunishment
 
-__all__ = ["Mode", "Objective", "Evaluation", "InvalidRequest"]
+__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -31,8 +31,8 @@ DEFAULT_OMEGA = 0.2
 class Mode(str, Enum):
     """Which constraints a plan must meet."""
 
-    FREE = "free"
-    RADIAL = "radial"
+    FREE = 'free'
+    RADIAL = 'radial'
 
 
 class InvalidRequest(ValueError):
@@ -57,7 +57,7 @@ class Objective:
         self.arm = arm
         self.mode = Mode(mode)
         if not (np.isfinite(omega) and omega > 0):
-            raise ValueError(f"angular velocity must be finite and positive, got {omega}")
+            raise ValueError(f'angular velocity must be finite and positive, got {omega}')
         self.omega = float(omega)
         self.shaping = shaping if shaping is not None else RewardPunishment()
         self.goal = self._check_goal(arm, goal)
@@ -78,9 +78,9 @@ class Objective:
     def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:
         g = np.asarray(goal, dtype=float)
         if g.shape != (3,):
-            raise InvalidRequest(f"goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}")
+            raise InvalidRequest(f'goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}')
         if not np.all(np.isfinite(g)):
-            raise InvalidRequest(f"goal has a non-finite coordinate: {g.tolist()}")
+            raise InvalidRequest(f'goal has a non-finite coordinate: {g.tolist()}')
         dist = float(np.linalg.norm(g))
         if dist > arm.reach:
             raise InvalidRequest(
@@ -91,15 +91,15 @@ class Objective:
     def _check_start(arm: ArmModel, start: np.ndarray) -> np.ndarray:
         q = np.asarray(start, dtype=float)
         if q.shape != (arm.n_joints,):
-            raise InvalidRequest(f"start needs {arm.n_joints} joint angles, got shape {q.shape}")
+            raise InvalidRequest(f'start needs {arm.n_joints} joint angles, got shape {q.shape}')
         if not np.all(np.isfinite(q)):
-            raise InvalidRequest(f"start has a non-finite joint angle: {q.tolist()}")
+            raise InvalidRequest(f'start has a non-finite joint angle: {q.tolist()}')
         out = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))
         if out.size:
             i = int(out[0])
             raise InvalidRequest(
-                f"start joint {arm.joint_names[i]} = {q[i]:.4f} rad is outside its limits "
-                f"[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]")
+                f'start joint {arm.joint_names[i]} = {q[i]:.4f} rad is outside its limits '
+                f'[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]')
         return np.clip(q, arm.lower, arm.upper)
 
     def full(self, x: np.ndarray) -> np.ndarray:
@@ -130,7 +130,7 @@ class Objective:
 
     def residual_norm(self, r: np.ndarray) -> np.ndarray:
         """The error (m) of residuals r (N, 3 or 4): the axis residual is scaled by the reach."""
-        sq = np.einsum("ij,ij->i", r[:, :3], r[:, :3])
+        sq = np.einsum('ij,ij->i', r[:, :3], r[:, :3])
         if self.radial:
             sq = sq + (self.arm.reach * r[:, 3]) ** 2
         return np.sqrt(sq)

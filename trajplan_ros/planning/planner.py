@@ -16,19 +16,19 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .arm import ArmModel, paper_arm
-from .baselines import de, ga, pso, spso
-from .fuzzy import RewardPunishment
-from .iepso import iepso
-from .objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
-from .optimize import OptimizeResult
-from .trajectory import Trajectory, servo_trajectory
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning.baselines import de, ga, pso, spso
+from trajplan_ros.planning.fuzzy import RewardPunishment
+from trajplan_ros.planning.iepso import iepso
+from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
+from trajplan_ros.planning.optimize import OptimizeResult
+from trajplan_ros.planning.trajectory import Trajectory, servo_trajectory
 
-__all__ = ["ALGORITHMS", "PlanResult", "PlanStatus", "plan", "DEFAULT_TOLERANCE"]
+__all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_TOLERANCE']
 
 #: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
 ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
-    "iepso": iepso, "pso": pso, "spso": spso, "ga": ga, "de": de,
+    'iepso': iepso, 'pso': pso, 'spso': spso, 'ga': ga, 'de': de,
 }
 #: Largest error (m) that counts as reached unless the caller says otherwise.
 DEFAULT_TOLERANCE = 1e-6
@@ -37,9 +37,9 @@ DEFAULT_TOLERANCE = 1e-6
 class PlanStatus(str, Enum):
     """How a planning request ended."""
 
-    SUCCEEDED = "succeeded"        # reached within tolerance
-    NOT_REACHED = "not_reached"    # optimised, but the best answer misses the goal
-    REJECTED = "rejected"          # refused before optimisation (bad goal or start)
+    SUCCEEDED = 'succeeded'        # reached within tolerance
+    NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal
+    REJECTED = 'rejected'          # refused before optimisation (bad goal or start)
 
 
 @dataclass
@@ -51,14 +51,14 @@ class PlanResult:
     goal: np.ndarray
     start: np.ndarray | None
     joint_goal: np.ndarray | None = None
-    position_error_m: float = float("nan")
-    radial_error_rad: float = float("nan")
-    motion_time_s: float = float("nan")
-    efficiency: float = float("nan")
+    position_error_m: float = float('nan')
+    radial_error_rad: float = float('nan')
+    motion_time_s: float = float('nan')
+    efficiency: float = float('nan')
     iterations: int = 0
     evaluations: int = 0
     plan_time_s: float = 0.0
-    algorithm: str = "iepso"
+    algorithm: str = 'iepso'
     mode: str = Mode.FREE.value
     omega: float = DEFAULT_OMEGA
     history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
@@ -71,7 +71,7 @@ class PlanResult:
     def trajectory(self, arm: ArmModel, sample_period: float = 0.1) -> Trajectory:
         """The fixed-angular-velocity joint trajectory from the start to the joint goal."""
         if self.joint_goal is None or self.start is None:
-            raise ValueError(f"no trajectory for a {self.status.value} plan: {self.message}")
+            raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
         return servo_trajectory(self.start, self.joint_goal, self.omega,
                                 sample_period=sample_period, joint_names=arm.joint_names)
 
@@ -80,25 +80,25 @@ class PlanResult:
         def num(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
         return {
-            "goal": [num(v) for v in self.goal],
-            "success": self.success,
-            "status": self.status.value,
-            "joint_goal": None if self.joint_goal is None else [float(v) for v in self.joint_goal],
-            "position_error_m": num(self.position_error_m),
-            "radial_error_rad": num(self.radial_error_rad),
-            "motion_time_s": num(self.motion_time_s),
-            "efficiency": num(self.efficiency),
-            "iterations": self.iterations,
-            "evaluations": self.evaluations,
-            "plan_time_s": self.plan_time_s,
-            "algorithm": self.algorithm,
-            "mode": self.mode,
-            "message": self.message,
+            'goal': [num(v) for v in self.goal],
+            'success': self.success,
+            'status': self.status.value,
+            'joint_goal': None if self.joint_goal is None else [float(v) for v in self.joint_goal],
+            'position_error_m': num(self.position_error_m),
+            'radial_error_rad': num(self.radial_error_rad),
+            'motion_time_s': num(self.motion_time_s),
+            'efficiency': num(self.efficiency),
+            'iterations': self.iterations,
+            'evaluations': self.evaluations,
+            'plan_time_s': self.plan_time_s,
+            'algorithm': self.algorithm,
+            'mode': self.mode,
+            'message': self.message,
         }
 
 
 def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
-         arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = "iepso",
+         arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = 'iepso',
          omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
          seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
@@ -126,7 +126,7 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     if algorithm not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
     if not (np.isfinite(tolerance) and tolerance > 0):
-        raise ValueError(f"tolerance must be finite and positive, got {tolerance}")
+        raise ValueError(f'tolerance must be finite and positive, got {tolerance}')
     clock = time.perf_counter()
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
@@ -141,15 +141,15 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     p, u = arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
     radial_err = (float(abs(np.arccos(np.clip(u[0, 2], -1, 1)) - np.arccos(obj.axis_target)))
-                  if obj.radial else float("nan"))
+                  if obj.radial else float('nan'))
     reached = found.error <= tolerance
     if reached:
         status = PlanStatus.SUCCEEDED
-        message = f"reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m"
+        message = f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m'
     else:
         status = PlanStatus.NOT_REACHED
-        message = (f"goal not reached: best error {found.error:.3g} m is above the tolerance "
-                   f"{tolerance:.3g} m")
+        message = (f'goal not reached: best error {found.error:.3g} m is above the tolerance '
+                   f'{tolerance:.3g} m')
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
         radial_error_rad=radial_err, motion_time_s=found.motion_time, efficiency=found.fun,

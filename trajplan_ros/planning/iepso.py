@@ -47,19 +47,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .objective import Objective
-from .optimize import History, OptimizeResult, initial_population
-from .polish import curve_minima, polish as polish_candidates
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.optimize import History, OptimizeResult, initial_population
+from trajplan_ros.planning.polish import curve_minima, polish as polish_candidates
 
-__all__ = ["iepso", "FREE_DEFAULTS", "RADIAL_DEFAULTS"]
+__all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
 #: Defaults of ``swarms``, ``polish_count`` and ``polish_steps`` by mode. Radial goals have
 #: isolated solutions (as many equations as joints) and the best one is often the landing point
 #: of only a few candidates: there more swarms and more polish candidates per swarm find it more
 #: often, and six steps are enough for Newton's method to settle on an isolated solution. Free
 #: goals have curves of solutions, along which the polish needs its eight steps.
-FREE_DEFAULTS = {"swarms": 16, "polish_count": 6, "polish_steps": 8}
-RADIAL_DEFAULTS = {"swarms": 24, "polish_count": 10, "polish_steps": 6}
+FREE_DEFAULTS = {'swarms': 16, 'polish_count': 6, 'polish_steps': 8}
+RADIAL_DEFAULTS = {'swarms': 24, 'polish_count': 10, 'polish_steps': 6}
 
 
 #: Error (m) below which a refined candidate counts towards agreement. Reaching eps is not
@@ -95,12 +95,12 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``History.stalled``.
     """
     defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
-    swarms = defaults["swarms"] if swarms is None else swarms
-    polish_count = defaults["polish_count"] if polish_count is None else polish_count
-    polish_steps = defaults["polish_steps"] if polish_steps is None else polish_steps
+    swarms = defaults['swarms'] if swarms is None else swarms
+    polish_count = defaults['polish_count'] if polish_count is None else polish_count
+    polish_steps = defaults['polish_steps'] if polish_steps is None else polish_steps
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
-        raise ValueError("population must be >= 2; swarms, max_iter, polish_count and "
-                         "polish_period >= 1")
+        raise ValueError('population must be >= 2; swarms, max_iter, polish_count and '
+                         'polish_period >= 1')
     rng = np.random.default_rng(seed)
     lo, hi = obj.lower, obj.upper
     span = hi - lo

@@ -1,0 +1,5 @@
+"""The arm model: a serial chain of revolute joints, its forward kinematics and Jacobian."""
+from trajplan_ros.kinematics.arm import ArmModel, InvalidArmModel, ToolJacobian
+from trajplan_ros.kinematics.paper_arm import paper_arm
+
+__all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian', 'paper_arm']

@@ -1,0 +1,31 @@
+"""The arm of Lv et al. 2019 (Table 3 and Table 4), the default arm everywhere."""
+from __future__ import annotations
+
+import numpy as np
+
+from trajplan_ros.kinematics.arm import ArmModel
+
+__all__ = ['paper_arm']
+
+
+def paper_arm() -> ArmModel:
+    """The arm of Lv et al. 2019 in SI units (Table 3 in metres, Table 4 limits).
+
+    DH (a, alpha, d): (0.010, -90deg, 0), (0.104, 0, 0), (0.096, 0, 0), (0.027, +90deg, 0),
+    (0, 0, 0.137). With theta = sign * q + offset, sign = (1, 1, 1, -1, 1) and
+    offset = (0, -90deg, 0, +90deg, 0) (NOTES.md), q = 0 is the upright pose with the tool at
+    (0.037, 0, 0.337) m and Table 5's IEPSO answer lands on the paper's target. Joints 1-4 are
+    planned; joint 5 spins the tool about its own axis and is held.
+    """
+    deg = np.pi / 180.0
+    return ArmModel(
+        a=[0.010, 0.104, 0.096, 0.027, 0.0],
+        alpha=[-90 * deg, 0.0, 0.0, 90 * deg, 0.0],
+        d=[0.0, 0.0, 0.0, 0.0, 0.137],
+        sign=[1, 1, 1, -1, 1],
+        offset=[0.0, -90 * deg, 0.0, 90 * deg, 0.0],
+        lower=np.array([-135, -90, -135, -135, -180]) * deg,
+        upper=np.array([135, 90, 135, 90, 180]) * deg,
+        joint_names=[f'joint{i}' for i in range(1, 6)],
+        planned=4,
+    )

@@ -1,0 +1,11 @@
+"""Direct trajectory planning: objective, fuzzy shaping, optimisers, trajectory and ``plan``."""
+from trajplan_ros.planning.fuzzy import RewardPunishment
+from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
+from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, PlanResult,
+                                           PlanStatus, plan)
+from trajplan_ros.planning.trajectory import Trajectory, servo_trajectory
+
+__all__ = [
+    'ALGORITHMS', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'Mode', 'Objective', 'PlanResult',
+    'PlanStatus', 'RewardPunishment', 'Trajectory', 'plan', 'servo_trajectory',
+]

@@ -1,0 +1,1 @@
+"""The ROS 2 side: the planner node, its settings, its work queue and message conversion."""

@@ -1,0 +1,121 @@
+"""The planner node's parameters: one table of names, defaults and ranges, and their checking.
+
+``PARAMETERS`` is the single source of the node's parameters: the node declares each with a
+descriptor built from it, and ``config/params.yaml`` repeats its defaults (a test holds the two
+equal). ``Settings.from_parameters`` turns a full set of values into the settings of the next
+plan, or refuses them with a one-line reason. Nothing here imports rclpy.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning import ALGORITHMS, DEFAULT_TOLERANCE, Mode
+from trajplan_ros.planning.objective import DEFAULT_OMEGA
+
+__all__ = ['PARAMETERS', 'ParameterSpec', 'Settings', 'default_values']
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One node parameter: its default, what it means, and the range or choices it accepts."""
+
+    name: str
+    default: Any
+    description: str
+    #: inclusive (low, high) bounds; the type of the default says whether they are integers
+    bounds: tuple[float, float] | None = None
+    choices: tuple[str, ...] = ()
+
+
+def _arm_specs() -> list[ParameterSpec]:
+    arm = paper_arm()
+    vectors = {
+        'a': 'DH link lengths a_i, m', 'alpha': 'DH link twists alpha_i, rad',
+        'd': 'DH link offsets d_i, m',
+        'offset': 'joint angle offsets, rad (theta_i = sign_i q_i + offset_i)',
+        'lower': 'lower joint limits on q, rad', 'upper': 'upper joint limits on q, rad',
+    }
+    specs = [ParameterSpec(f'arm.{key}', getattr(arm, key).tolist(), f'{meaning}, one per joint')
+             for key, meaning in vectors.items()]
+    return specs + [
+        ParameterSpec('arm.sign', [int(s) for s in arm.sign],
+                      'joint direction signs (+1 or -1) in theta_i = sign_i q_i + offset_i'),
+        ParameterSpec('arm.joint_names', list(arm.joint_names),
+                      'joint names, base to tool, as in joint_states and the published trajectory'),
+        ParameterSpec('arm.planned', arm.planned,
+                      'how many leading joints are planned; the rest hold', bounds=(2, 7)),
+        ParameterSpec('start_positions', [0.0] * arm.n_joints,
+                      'start joint angles, rad, used until joint_states or a published '
+                      'trajectory tells the state'),
+    ]
+
+
+#: Every parameter of the node, in declaration order.
+PARAMETERS: tuple[ParameterSpec, ...] = (
+    *_arm_specs(),
+    ParameterSpec('angular_velocity', DEFAULT_OMEGA, 'servo angular velocity omega, rad/s',
+                  bounds=(1e-3, 10.0)),
+    ParameterSpec('mode', Mode.FREE.value,
+                  'free: position only; radial: eq. 12-13 orientation too',
+                  choices=tuple(m.value for m in Mode)),
+    ParameterSpec('algorithm', 'iepso', 'optimiser', choices=tuple(ALGORITHMS)),
+    ParameterSpec('population', 40, 'particles per swarm', bounds=(2, 10000)),
+    ParameterSpec('max_iterations', 1000, 'iteration cap', bounds=(1, 1000000)),
+    ParameterSpec('seed', 0, 'random seed; -1: a fresh seed every plan', bounds=(-1, 2**31 - 1)),
+    ParameterSpec('tolerance', DEFAULT_TOLERANCE,
+                  'largest position error that counts as reached, m '
+                  '(a GetPlan tolerance > 0 wins)', bounds=(1e-12, 1.0)),
+    ParameterSpec('base_frame', 'base_link', 'frame_id of the returned tool path'),
+    ParameterSpec('sample_period', 0.1, 'time between trajectory points, s',
+                  bounds=(1e-3, 10.0)),
+)
+
+
+def default_values() -> dict[str, Any]:
+    """Every parameter's default, by name."""
+    return {spec.name: spec.default for spec in PARAMETERS}
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The planning settings in force, built from (and checked against) the node's parameters."""
+
+    arm: ArmModel
+    omega: float
+    mode: str
+    algorithm: str
+    population: int
+    max_iter: int
+    seed: int | None
+    tolerance: float
+    base_frame: str
+    sample_period: float
+    start: np.ndarray
+
+    @classmethod
+    def from_parameters(cls, values: Mapping[str, Any]) -> Settings:
+        """Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused."""
+        arm = ArmModel(*(values[f'arm.{k}'] for k in ('a', 'alpha', 'd')),
+                       sign=values['arm.sign'], offset=values['arm.offset'],
+                       lower=values['arm.lower'], upper=values['arm.upper'],
+                       joint_names=list(values['arm.joint_names']), planned=values['arm.planned'])
+        for spec in PARAMETERS:
+            if spec.choices and values[spec.name] not in spec.choices:
+                raise ValueError(f"{spec.name} must be one of {', '.join(spec.choices)}, "
+                                 f'got {values[spec.name]!r}')
+        if not values['base_frame']:
+            raise ValueError('base_frame must not be empty')
+        start = np.asarray(values['start_positions'], dtype=float)
+        if start.shape != (arm.n_joints,) or not np.all(np.isfinite(start)):
+            raise ValueError(f'start_positions needs {arm.n_joints} finite angles for the '
+                             f'{arm.n_joints}-joint arm, got {list(start)} (change both at once)')
+        return cls(arm=arm, omega=values['angular_velocity'], mode=values['mode'],
+                   algorithm=values['algorithm'], population=values['population'],
+                   max_iter=values['max_iterations'],
+                   seed=None if values['seed'] < 0 else values['seed'],
+                   tolerance=values['tolerance'], base_frame=values['base_frame'],
+                   sample_period=values['sample_period'], start=start)

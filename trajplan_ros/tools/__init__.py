@@ -1,0 +1,1 @@
+"""Tools around the library: the ``trajplan`` command, benchmarks, figures and the demo."""

@@ -1,0 +1,160 @@
+"""The ``trajplan`` command: plan goals from the shell, one at a time or from a CSV file."""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from pathlib import Path
+from typing import Iterator, Sequence
+
+import numpy as np
+
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.planning.planner import ALGORITHMS, DEFAULT_TOLERANCE, PlanResult, PlanStatus, plan
+from trajplan_ros.tools import bench, demo, figures
+from trajplan_ros.tools.arguments import UsageError, finite_number
+
+__all__ = ['main', 'build_parser']
+
+
+def _add_plan(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser('plan', help='plan the joint goal and motion for tool positions',
+                       description='Plan with the default (paper) arm. Units: metres, radians.')
+    p.add_argument('xyz', nargs='*', type=finite_number, metavar='X Y Z',
+                   help='goal position of the tool in metres (omit with --goals)')
+    p.add_argument('--goals', metavar='FILE',
+                   help="CSV file, one goal a line: x,y,z[,q1,...,qn start angles]; '-' for stdin")
+    p.add_argument('--start', nargs='+', type=finite_number, metavar='Q',
+                   help='start joint angles in radians (default: upright, all zero)')
+    p.add_argument('--mode', choices=[m.value for m in Mode], default=Mode.FREE.value)
+    p.add_argument('--algorithm', choices=list(ALGORITHMS), default='iepso')
+    p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
+    p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
+                   help=f'largest error in metres that counts as reached (default {DEFAULT_TOLERANCE})')
+    p.add_argument('--json', action='store_true', help='print one JSON object a line')
+    p.set_defaults(run=_run_plan)
+
+
+def _add_urdf(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser('urdf', help='print the arm as a URDF (for robot_state_publisher and RViz)',
+                       description='Print the default (paper) arm as a URDF whose joint values are '
+                                   "the planner's joint angles q.")
+    p.add_argument('-o', '--output', metavar='FILE', help='write to FILE instead of printing')
+    p.add_argument('--name', default='paper_arm', help='robot name (default paper_arm)')
+    p.set_defaults(run=_run_urdf)
+
+
+def _run_urdf(args: argparse.Namespace) -> int:
+    text = urdf_xml(paper_arm(), args.name, velocity=DEFAULT_OMEGA)
+    if args.output is None:
+        sys.stdout.write(text)
+    else:
+        Path(args.output).write_text(text, encoding='utf-8')
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog='trajplan', description='Direct trajectory planning with IEPSO (Lv et al. 2019).')
+    sub = parser.add_subparsers(dest='command', required=True)
+    _add_plan(sub)
+    # each subcommand imports its optional extras (scipy, matplotlib, rclpy) only when it runs
+    for add_parser in (bench.add_parser, figures.add_parser, _add_urdf, demo.add_parser):
+        add_parser(sub)
+    return parser
+
+
+def _start_vector(values: Sequence[float] | None, n_joints: int) -> np.ndarray | None:
+    if values is None:
+        return None
+    if len(values) > n_joints:
+        raise UsageError(f'--start takes at most {n_joints} angles, got {len(values)}')
+    q = np.zeros(n_joints)
+    q[: len(values)] = values
+    return q
+
+
+def _goal_lines(path: str) -> Iterator[tuple[int, list[str]]]:
+    handle = sys.stdin if path == '-' else open(path, newline='', encoding='utf-8')
+    with handle:
+        for number, row in enumerate(csv.reader(handle), start=1):
+            cells = [c.strip() for c in row]
+            if not any(cells) or cells[0].startswith('#'):
+                continue
+            yield number, cells
+
+
+def _parse_line(cells: list[str], n_joints: int) -> tuple[np.ndarray, np.ndarray | None]:
+    if len(cells) < 3:
+        raise UsageError(f'expected x,y,z[,start angles], got {len(cells)} field(s)')
+    try:
+        values = [float(c) for c in cells]
+    except ValueError as exc:
+        raise UsageError(f'not a number: {exc}') from None
+    start = _start_vector(values[3:], n_joints) if len(values) > 3 else None
+    return np.array(values[:3]), start
+
+
+def _human(result: PlanResult) -> str:
+    goal = ', '.join(f'{v:.6g}' for v in result.goal)
+    lines = [f'goal ({goal}) m: {result.status.value}: {result.message}']
+    if result.joint_goal is not None:
+        lines.append('joint goal [rad]: ' + ' '.join(f'{v:+.6f}' for v in result.joint_goal))
+        lines.append(f'motion time {result.motion_time_s:.4f} s, position error '
+                     f'{result.position_error_m:.3g} m, efficiency F {result.efficiency:.4f}, '
+                     f'{result.iterations} iterations, planned in {1e3 * result.plan_time_s:.1f} ms')
+    return '\n'.join(lines)
+
+
+def _run_plan(args: argparse.Namespace) -> int:
+    arm = paper_arm()
+    settings = dict(arm=arm, mode=args.mode, algorithm=args.algorithm, seed=args.seed,
+                    tolerance=args.tolerance)
+    if args.goals is None:
+        if len(args.xyz) != 3:
+            raise UsageError(f'give a goal as X Y Z (3 numbers) or --goals FILE, got {len(args.xyz)} number(s)')
+        result = plan(args.xyz, _start_vector(args.start, arm.n_joints), **settings)
+        print(json.dumps(result.to_dict()) if args.json else _human(result))
+        return 0 if result.success else 1
+    if args.xyz:
+        raise UsageError('give either X Y Z or --goals FILE, not both')
+    try:
+        lines = list(_goal_lines(args.goals))
+    except OSError as exc:
+        raise UsageError(f'cannot read {args.goals}: {exc.strerror}') from None
+    failures = 0
+    for number, cells in lines:
+        try:
+            goal, start = _parse_line(cells, arm.n_joints)
+            if start is None:
+                start = _start_vector(args.start, arm.n_joints)
+            result = plan(goal, start, **settings)
+        except UsageError as exc:
+            failures += 1
+            record = {'line': number, 'goal': None, 'success': False,
+                      'status': PlanStatus.REJECTED.value, 'message': f'line {number}: {exc}'}
+            print(json.dumps(record) if args.json else record['message'])
+            continue
+        failures += not result.success
+        record = {'line': number, **result.to_dict()}
+        print(json.dumps(record) if args.json else _human(result))
+    return 0 if failures == 0 else 1
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args)
+    except (UsageError, ValueError) as exc:
+        print(f'trajplan: error: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())
