@@ -1,4 +1,5 @@
-"""Shared fixtures for the ROS 2 integration tests (test_node*.py).
+"""
+Shared fixtures for the ROS 2 integration tests (test_node*.py).
 
 Importing this file needs no ROS 2: rclpy and the interface packages are imported inside the
 fixtures, so the core's tests run where ROS 2 is absent. The ROS tests themselves import rclpy
@@ -127,7 +128,8 @@ class NodeProcess(PlannerProcess):
 
 @pytest.fixture(scope='session')
 def start_node(colcon_install: Install, ros_env: dict[str, str]) -> Iterator[Callable[..., NodeProcess]]:
-    """Factory: ``start_node(*ros_args, ready=True)`` runs the installed planner_node.
+    """
+    Factory: ``start_node(*ros_args, ready=True)`` runs the installed planner_node.
 
     With ``ready`` it waits for the node's "ready" log line. Every node started is stopped
     (SIGINT, then SIGKILL) at the end of the session if a test has not stopped it.

@@ -1,4 +1,5 @@
-"""``trajplan bench``: seeded goals, one objective for every method, honest tables and CSV files.
+"""
+``trajplan bench``: seeded goals, one objective for every method, honest tables and CSV files.
 
 No test asserts on wall-clock speed; the sizes are tiny so the file runs in seconds.
 """

@@ -1,4 +1,5 @@
-"""The planner node over real DDS: the colcon-installed planner_node in its own process.
+"""
+The planner node over real DDS: the colcon-installed planner_node in its own process.
 
 Everything here talks to the node the way another ROS 2 process would: the service, the goal
 and joint_states topics, the published trajectory and the node's log lines.
@@ -50,8 +51,10 @@ def started_from(node: NodeProcess, kind: str, goal: tuple[float, float, float],
 
 
 def trajectory_to(box, goal: tuple[float, float, float], arm=ARM, tol: float = 1e-5):
-    """The next trajectory in ``box`` that ends at ``goal`` (one from an earlier plan may still be
-    on its way: the node publishes just after answering)."""
+    """
+    The next trajectory in ``box`` that ends at ``goal`` (one from an earlier plan may still be
+    on its way: the node publishes just after answering).
+    """
     deadline = time.monotonic() + LIVENESS_S
     while True:
         msg = box.get(timeout=max(0.0, deadline - time.monotonic()))

@@ -1,5 +1,7 @@
-"""``trajplan demo`` end to end: it starts planner_node, plans the paper's example through the
-service, prints the plan and the trajectory, and stops the node it started."""
+"""
+``trajplan demo`` end to end: it starts planner_node, plans the paper's example through the
+service, prints the plan and the trajectory, and stops the node it started.
+"""
 from __future__ import annotations
 
 import os

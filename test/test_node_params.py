@@ -1,4 +1,5 @@
-"""The planner node's parameters and names, over real DDS, through its parameter services.
+"""
+The planner node's parameters and names, over real DDS, through its parameter services.
 
 The node here runs in a namespace with its trajectory remapped, as it would next to a
 joint_trajectory_controller: every name it uses must follow.

@@ -1,4 +1,5 @@
-"""trajplan_ros: direct trajectory planning with IEPSO and fuzzy rewards and punishment.
+"""
+trajplan_ros: direct trajectory planning with IEPSO and fuzzy rewards and punishment.
 
 The package is layered; each layer uses only those listed before it:
 

@@ -1,4 +1,5 @@
-"""Serial revolute arm described by Denavit-Hartenberg parameters (Lv et al. 2019, eq. 1-2).
+"""
+Serial revolute arm described by Denavit-Hartenberg parameters (Lv et al. 2019, eq. 1-2).
 
 Each joint i has standard DH parameters (a_i, alpha_i, d_i) and its DH angle is
 ``theta_i = sign_i * q_i + offset_i``, where q is the joint angle a user commands. The paper's
@@ -32,7 +33,8 @@ def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class ToolJacobian:
-    """Tool position p and axis u with, per planned joint i, the derivatives
+    """
+    Tool position p and axis u with, per planned joint i, the derivatives
     dp/dq_i = Z_i x (p - o_i) and du/dq_i = Z_i x u and the signed joint axis Z_i (axis of
     joint i times its sign), all in the base frame.
 
@@ -64,7 +66,8 @@ class ToolJacobian:
         return self.columns[:, :, 1].transpose(2, 0, 1)
 
     def curvature(self, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Second derivatives of p and u along joint directions n (N, planned): d2/dt2 at t = 0
+        """
+        Second derivatives of p and u along joint directions n (N, planned): d2/dt2 at t = 0
         of p(q + t n) and u(q + t n), each (N, 3).
 
         The derivative of column i with respect to q_j, for j <= i (j nearer the base), is
@@ -91,7 +94,8 @@ _TOOL_FRAME = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
 
 @dataclass(frozen=True, eq=False)
 class ArmModel:
-    """A chain of revolute joints; the first ``planned`` joints are optimised, the rest held.
+    """
+    A chain of revolute joints; the first ``planned`` joints are optimised, the rest held.
 
     Attributes (all arrays have one entry per joint):
         a, alpha, d: DH link length (m), twist (rad) and offset (m), transform
@@ -154,7 +158,8 @@ class ArmModel:
 
     @property
     def reach(self) -> float:
-        """Radius of a sphere about the base origin that contains every tool position (eq. 14).
+        """
+        Radius of a sphere about the base origin that contains every tool position (eq. 14).
 
         Each link moves the tool point by at most sqrt(a_i^2 + d_i^2), so no goal farther than
         the sum can be reached, whatever the joint angles.
@@ -167,7 +172,8 @@ class ArmModel:
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
 
     def held_tail(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The tool point and axis in frame ``planned`` with the held joints at q (n_joints,).
+        """
+        The tool point and axis in frame ``planned`` with the held joints at q (n_joints,).
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
@@ -177,7 +183,8 @@ class ArmModel:
 
     def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
              ) -> tuple[np.ndarray, np.ndarray]:
-        """Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
+        """
+        Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
 
         With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
         """
@@ -187,7 +194,8 @@ class ArmModel:
 
     def tool_jacobian(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
                       ) -> ToolJacobian:
-        """Tool position and axis, their first derivatives and the joint axes; see ``ToolJacobian``.
+        """
+        Tool position and axis, their first derivatives and the joint axes; see ``ToolJacobian``.
 
         ``tail`` as for ``tool``.
         """
@@ -203,7 +211,8 @@ class ArmModel:
 
     def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],
                jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Walk joints top-1 .. bottom from frame ``top`` towards the base (every optimiser's hot path).
+        """
+        Walk joints top-1 .. bottom from frame ``top`` towards the base (every optimiser's hot path).
 
         ``tail`` is the tool point and axis in frame ``top`` as (w, z) with w = x + i y
         (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool

@@ -9,7 +9,8 @@ __all__ = ['paper_arm']
 
 
 def paper_arm() -> ArmModel:
-    """The arm of Lv et al. 2019 in SI units (Table 3 in metres, Table 4 limits).
+    """
+    The arm of Lv et al. 2019 in SI units (Table 3 in metres, Table 4 limits).
 
     DH (a, alpha, d): (0.010, -90deg, 0), (0.104, 0, 0), (0.096, 0, 0), (0.027, +90deg, 0),
     (0, 0, 0.137). With theta = sign * q + offset, sign = (1, 1, 1, -1, 1) and

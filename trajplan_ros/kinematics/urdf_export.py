@@ -1,4 +1,5 @@
-"""An arm model as a URDF document, for robot_state_publisher and RViz (``trajplan urdf``).
+"""
+An arm model as a URDF document, for robot_state_publisher and RViz (``trajplan urdf``).
 
 Joint i of an ``ArmModel`` turns DH frame i-1 into frame i by
 T_i = Rz(sign_i q_i + offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i). In the URDF, link i is DH frame i-1
@@ -29,7 +30,8 @@ _COLOURS = {'base': '0.25 0.25 0.28 1', 'link': '0.95 0.55 0.1 1', 'joint': '0.1
 
 
 def rpy_from_matrix(rot: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw of a rotation matrix: rot = Rz(yaw) Ry(pitch) Rx(roll).
+    """
+    URDF roll, pitch, yaw of a rotation matrix: rot = Rz(yaw) Ry(pitch) Rx(roll).
 
     At pitch = +-90 deg (gimbal lock) roll and yaw are not separable; roll is then 0.
     """

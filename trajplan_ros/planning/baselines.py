@@ -1,4 +1,5 @@
-"""The comparison algorithms of section VI.B: PSO, SPSO, GA and DE on the same objective.
+"""
+The comparison algorithms of section VI.B: PSO, SPSO, GA and DE on the same objective.
 
 Each takes the objective, a population size, an iteration cap and a seed, vectorised over the
 population, and stops by the same rule as IEPSO without polish (``optimize.History``), so with

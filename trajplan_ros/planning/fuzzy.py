@@ -1,4 +1,5 @@
-"""Fuzzy rewards and punishment (Lv et al. 2019, section IV and VI.A), in SI units.
+"""
+Fuzzy rewards and punishment (Lv et al. 2019, section IV and VI.A), in SI units.
 
 The paper works in millimetres; here every length is in metres, so its thresholds become
 eps = 0.005 mm = 5e-6 m and s = 0.5e-6 mm = 5e-10 m. k = 10000 and j = 3 are dimensionless
@@ -82,7 +83,8 @@ def linear_membership(x: np.ndarray, a: float, b: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class RewardPunishment:
-    """The S term of eq. (9) with Table 4's defaults in metres.
+    """
+    The S term of eq. (9) with Table 4's defaults in metres.
 
     Attributes:
         eps: reward and punishment waken threshold (m); errors above it are punished.
@@ -128,7 +130,8 @@ class RewardPunishment:
         return np.clip(np.where(err <= self.eps, reward_side, punish_side), -1.0, 1.0)
 
     def rule_degree(self, lam: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau.
+        """
+        Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau.
 
         Rule strength is min(mu_row(tau), mu_col(lambda)) (eq. 6); the degree is the
         strength-weighted mean of the rules' output levels. The memberships are computed in

@@ -1,4 +1,5 @@
-"""IEPSO: PSO with a local-global information-sharing term and last-elimination (section III).
+"""
+IEPSO: PSO with a local-global information-sharing term and last-elimination (section III).
 
 Velocity and position updates, eq. (3)-(5):
 
@@ -70,8 +71,10 @@ SETTLED = 1e-14
 
 
 def _agreeing(motion_time: np.ndarray, error: np.ndarray) -> tuple[int, float]:
-    """How many candidates have settled on the goal (error <= ``SETTLED``) within 1e-6 of the
-    best such motion time, and that best time (inf when none has)."""
+    """
+    How many candidates have settled on the goal (error <= ``SETTLED``) within 1e-6 of the
+    best such motion time, and that best time (inf when none has).
+    """
     reached = error <= SETTLED
     if not reached.any():
         return 0, np.inf
@@ -87,7 +90,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
           elimination: float = 0.1, elimination_period: int = 5,
           inertia: tuple[float, float] = (0.9, 0.4), c1: float = 2.0, c2: float = 2.0,
           c3: tuple[float, float] = (2.0, 0.0), max_velocity: float = 0.2) -> OptimizeResult:
-    """Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
+    """
+    Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
 
     ``max_velocity`` caps each velocity component at that fraction of the joint's range.
     ``swarms``, ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,

@@ -1,4 +1,5 @@
-"""The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and start.
+"""
+The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and start.
 
 R (eq. 10) is the motion time when every servo turns at the same angular velocity omega:
 max_i |q_i - q_start_i| / omega over the planned joints. S is the fuzzy rewards-and-punishment

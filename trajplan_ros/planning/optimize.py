@@ -12,7 +12,8 @@ __all__ = ['OptimizeResult', 'History', 'initial_population']
 
 @dataclass
 class OptimizeResult:
-    """Best joint goal found by an optimiser (planned joints only), scipy.optimize style.
+    """
+    Best joint goal found by an optimiser (planned joints only), scipy.optimize style.
 
     Attributes:
         x: best planned-joint vector (rad).
@@ -37,7 +38,8 @@ class OptimizeResult:
 
 
 class History:
-    """Per-iteration record of the best F and its error, and the tolerance-based stopping rule.
+    """
+    Per-iteration record of the best F and its error, and the tolerance-based stopping rule.
 
     The run has converged when the best F has improved by less than ``tol`` over the last
     ``patience`` iterations while its error is within the reward threshold (the paper's

@@ -1,4 +1,5 @@
-"""Direct trajectory planning (Lv et al. 2019): search the final joint angles, then move there.
+"""
+Direct trajectory planning (Lv et al. 2019): search the final joint angles, then move there.
 
 ``plan`` is the one entry point of the library, the ``trajplan`` command and the ROS node:
 
@@ -103,7 +104,8 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
          options: dict[str, Any] | None = None) -> PlanResult:
-    """Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
+    """
+    Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
 
     Args:
         goal: tool position (x, y, z) in metres.

@@ -1,4 +1,5 @@
-"""Local polish of candidate joint goals: exact reach, then least motion time along the solutions.
+"""
+Local polish of candidate joint goals: exact reach, then least motion time along the solutions.
 
 Not part of the paper. The swarm finds the basin; this finishes the job to machine precision.
 It solves
@@ -42,7 +43,8 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable.
+    """
+    Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable.
 
     Call inside np.errstate(divide="ignore", invalid="ignore").
     """
@@ -54,7 +56,8 @@ def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, 
 
 def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
                   zhi: np.ndarray) -> np.ndarray:
-    """argmin over z in [zlo, zhi] of max_i |b_i + n_i z + a_i z^2|, ties to least total travel.
+    """
+    argmin over z in [zlo, zhi] of max_i |b_i + n_i z + a_i z^2|, ties to least total travel.
 
     b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
     """
@@ -76,8 +79,10 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
 
 
 def _inverse(m: np.ndarray) -> np.ndarray:
-    """Inverses of symmetric matrices (K, s, s): the adjugate formula for s = 3 (the position
-    constraints; several times cheaper than LAPACK on small batches), np.linalg.inv otherwise."""
+    """
+    Inverses of symmetric matrices (K, s, s): the adjugate formula for s = 3 (the position
+    constraints; several times cheaper than LAPACK on small batches), np.linalg.inv otherwise.
+    """
     if m.shape[1] != 3:
         return np.linalg.inv(m)
     a, b, c, _, d, e, _, _, f = m.reshape(-1, 9).T
@@ -91,7 +96,8 @@ def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
 
 
 class _Linearisation:
-    """c(x), the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null space
+    """
+    c(x), the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null space
     and, along each null direction n, half the curvature of the solution set: x''/2 = -J^+ c''/2,
     with c'' the exact second derivative of c along n (``ToolJacobian.curvature``).
 
@@ -146,7 +152,8 @@ class _Linearisation:
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
            enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None
            ) -> np.ndarray:
-    """Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
+    """
+    Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
     ``enough(time, error, active)``, if given, is asked after every step and ends the polish
     early when it returns True (each candidate's motion time, s, and constraint error, m, and
@@ -193,7 +200,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
 
 
 def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray:
-    """Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x
+    """
+    Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x
     (one null direction), in order along it with x in the middle.
 
     ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
@@ -214,7 +222,8 @@ def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarra
 
 
 def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int = 18) -> np.ndarray:
-    """Seeds for ``polish`` from the curve through the solution x (planned,) that may lead to
+    """
+    Seeds for ``polish`` from the curve through the solution x (planned,) that may lead to
     faster solutions than x; empty when there is no such curve.
 
     * With one null direction (free mode with four planned joints, radial mode with five) the

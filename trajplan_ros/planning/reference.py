@@ -1,4 +1,5 @@
-"""Exact minimum motion time for the paper's arm family, for tests and benchmarks only.
+"""
+Exact minimum motion time for the paper's arm family, for tests and benchmarks only.
 
 Reaching a point with the yaw + three-parallel-pitch joints of Lv et al.'s arm leaves one free
 parameter, phi = theta2 + theta3 + theta4 (DH). For each phi there are at most four exact
@@ -75,7 +76,8 @@ def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.
 
 def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
                   mode: str = 'free', samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
-    """True minimum of R = max|q - start| / omega over all in-limit q that reach ``goal`` exactly.
+    """
+    True minimum of R = max|q - start| / omega over all in-limit q that reach ``goal`` exactly.
 
     mode "free": sweep phi over [-pi, pi]; mode "radial": phi is fixed by eq. (12)-(13) to
     +-radial_angle(goal) (the tool axis at the goal's polar angle from the base z axis).

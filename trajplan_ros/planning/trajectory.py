@@ -1,4 +1,5 @@
-"""Joint trajectory of the paper's servo model: every joint turns at one fixed angular velocity.
+"""
+Joint trajectory of the paper's servo model: every joint turns at one fixed angular velocity.
 
 Joint i leaves q_start_i at t = 0 towards q_goal_i at +-omega and stops when it arrives, at
 t_i = |q_goal_i - q_start_i| / omega; the motion ends at R = max_i t_i (eq. 10). The trajectory
@@ -44,7 +45,8 @@ class Trajectory:
 def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
                      sample_period: float = 0.1,
                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
-    """The fixed-angular-velocity motion from ``start`` to ``goal`` (both (n_joints,), rad).
+    """
+    The fixed-angular-velocity motion from ``start`` to ``goal`` (both (n_joints,), rad).
 
     A start equal to the goal (or within a microsecond of motion of it) gives one point at
     ``sample_period`` with zero velocity. A joint whose own motion is that short is not sampled

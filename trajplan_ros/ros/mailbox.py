@@ -1,4 +1,5 @@
-"""The planner node's work queue: every service call in order, plus the newest topic goal.
+"""
+The planner node's work queue: every service call in order, plus the newest topic goal.
 
 The executor threads put work in; the node's one worker thread takes it out. A service call's
 callback waits on the job's ``done`` event for its answer.
@@ -16,8 +17,10 @@ __all__ = ['Job', 'Mailbox']
 
 @dataclass
 class Job:
-    """One goal for the worker. For a service call, ``done`` is set once ``path`` is final and
-    ``answered`` once the service callback has taken it."""
+    """
+    One goal for the worker. For a service call, ``done`` is set once ``path`` is final and
+    ``answered`` once the service callback has taken it.
+    """
 
     label: str
     goal: tuple[float, float, float]

@@ -16,7 +16,8 @@ __all__ = ['path_msg', 'quaternions', 'trajectory_msg']
 
 
 def quaternions(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternions (x, y, z, w) of rotation matrices (N, 3, 3).
+    """
+    Unit quaternions (x, y, z, w) of rotation matrices (N, 3, 3).
 
     Builds K = 4 q q^T (q = (w, x, y, z)) from the matrix entries and takes the row of its
     largest diagonal entry, which is well conditioned for every rotation.
@@ -51,7 +52,8 @@ def trajectory_msg(traj: Trajectory) -> JointTrajectory:
 
 def path_msg(arm: ArmModel, traj: Trajectory, header: Header,
              blanks: list[PoseStamped] | None = None) -> Path:
-    """The tool path of ``traj``: one pose per trajectory point, from forward kinematics.
+    """
+    The tool path of ``traj``: one pose per trajectory point, from forward kinematics.
 
     The poses share ``header`` and are filled in place, taken from ``blanks`` (new
     PoseStamped messages made in advance) while it lasts: building a message costs more than

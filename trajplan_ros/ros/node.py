@@ -1,4 +1,5 @@
-"""The ROS 2 planner node ``trajplan`` (executable ``planner_node``): a thin shell around ``plan``.
+"""
+The ROS 2 planner node ``trajplan`` (executable ``planner_node``): a thin shell around ``plan``.
 
 Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping apply):
 
@@ -209,8 +210,10 @@ class PlannerNode(Node):
 
     @staticmethod
     def _answer(job: Job, path: Path | None = None) -> None:
-        """Hand a service call its path (None: an empty plan) once, and wait until the service
-        callback has taken it, so the answer goes out before this thread carries on."""
+        """
+        Hand a service call its path (None: an empty plan) once, and wait until the service
+        callback has taken it, so the answer goes out before this thread carries on.
+        """
         if job.done is not None and not job.done.is_set():
             job.path = path
             job.done.set()
@@ -246,7 +249,8 @@ class PlannerNode(Node):
                                f'points over {traj.duration:.3f} s')
 
     def destroy_node(self) -> None:
-        """Answer the service calls still waiting with an empty plan, then destroy the node.
+        """
+        Answer the service calls still waiting with an empty plan, then destroy the node.
 
         A plan in progress cannot be interrupted: the daemon worker thread ends with the process.
         """

@@ -1,4 +1,5 @@
-"""The planner node's parameters: one table of names, defaults and ranges, and their checking.
+"""
+The planner node's parameters: one table of names, defaults and ranges, and their checking.
 
 ``PARAMETERS`` is the single source of the node's parameters: the node declares each with a
 descriptor built from it, and ``config/params.yaml`` repeats its defaults (a test holds the two

@@ -1,4 +1,5 @@
-"""Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.bench_node``.
+"""
+Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.bench_node``.
 
 The node runs as a child process (``demo.PlannerProcess``: a DDS domain of its own, localhost
 discovery) with its default parameters; this process is its client.
@@ -94,8 +95,10 @@ class _Client:
         self.thread.start()
 
     def call(self, client: Any, request: Any) -> tuple[Any | None, float]:
-        """(answer or None on timeout, round trip in s): from sending the request to the
-        response callback, which runs in the executor thread as soon as the answer is in."""
+        """
+        (answer or None on timeout, round trip in s): from sending the request to the
+        response callback, which runs in the executor thread as soon as the answer is in.
+        """
         done = threading.Event()
         arrived: list[float] = []
 
@@ -130,9 +133,11 @@ def _in_process(goals: np.ndarray) -> list[float]:
 
 def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
            idle: bool) -> tuple[list[float], list[float], list[int]] | str:
-    """Call plan_trajectory on each goal in turn: (round trips, logged plan times, poses in
+    """
+    Call plan_trajectory on each goal in turn: (round trips, logged plan times, poses in
     each answer), or the reason it failed. With ``idle``, each call waits until the node has
-    logged the one before, its last step (publishing and logging follow the answer)."""
+    logged the one before, its last step (publishing and logging follow the answer).
+    """
     trips, sizes = [], []
     for i, goal in enumerate(goals):
         request = GetPlan.Request()

@@ -1,4 +1,5 @@
-"""The ``trajplan demo`` subcommand: start the ROS 2 planner node and plan the paper's example.
+"""
+The ``trajplan demo`` subcommand: start the ROS 2 planner node and plan the paper's example.
 
 It runs ``planner_node`` as a child process in a DDS domain of its own (localhost discovery),
 calls its ``plan_trajectory`` service with the paper's target, prints the plan, the tool path's
@@ -32,8 +33,10 @@ __all__ = ['PlannerProcess', 'add_parser', 'planner_command', 'ros_environment']
 
 
 def planner_command() -> list[str]:
-    """How to start the node: ``planner_node`` beside this Python (a venv's bin), else on PATH,
-    else ``python -m trajplan_ros.ros.node`` (a source checkout)."""
+    """
+    How to start the node: ``planner_node`` beside this Python (a venv's bin), else on PATH,
+    else ``python -m trajplan_ros.ros.node`` (a source checkout).
+    """
     beside = Path(sys.executable).with_name('planner_node')
     if beside.is_file() and os.access(beside, os.X_OK):
         return [str(beside)]
@@ -42,9 +45,11 @@ def planner_command() -> list[str]:
 
 
 def ros_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
-    """``base`` (default os.environ) with a DDS domain of this process's own (1..100, from the
+    """
+    ``base`` (default os.environ) with a DDS domain of this process's own (1..100, from the
     pid), localhost-only discovery, and this Python's prefix on AMENT_PREFIX_PATH (where the
-    pip-installed ROS 2 packages register themselves)."""
+    pip-installed ROS 2 packages register themselves).
+    """
     env = dict(os.environ if base is None else base)
     env['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 100)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'

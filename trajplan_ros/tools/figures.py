@@ -1,4 +1,5 @@
-"""The ``trajplan figures`` subcommand: the paper's figures, redrawn from runs of this package.
+"""
+The ``trajplan figures`` subcommand: the paper's figures, redrawn from runs of this package.
 
 Every figure comes from the paper's experiment (its target from q = 0, Table 4 settings) with
 the seed ``--seed``; IEPSO appears twice, as this package runs it and as published (one swarm,

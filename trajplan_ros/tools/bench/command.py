@@ -1,4 +1,5 @@
-"""The ``trajplan bench`` subcommand: IEPSO against the paper's comparison algorithms and the peers
+"""
+The ``trajplan bench`` subcommand: IEPSO against the paper's comparison algorithms and the peers
 a Python user would pick instead, on the same goals, starts, seeds and objective F, in one run.
 
 Methods (``METHODS``): the five algorithms of the paper through ``plan`` (IEPSO, PSO, SPSO, GA,
@@ -102,7 +103,8 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
 
 
 def _quiet_logging() -> ContextManager:
-    """Keep the process's logging as it is while pyswarms imports and builds its objects.
+    """
+    Keep the process's logging as it is while pyswarms imports and builds its objects.
 
     Each of pyswarms' modules and objects calls ``logging.config.dictConfig``, which replaces the
     root logger's handlers and opens ./report.log in the working directory.
@@ -170,7 +172,8 @@ class Case:
 
 
 def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int) -> list[Case]:
-    """``n`` goals from seeded random in-limit configurations (rejecting goals without a solution).
+    """
+    ``n`` goals from seeded random in-limit configurations (rejecting goals without a solution).
 
     Each draw takes two configurations, the goal's and the start's, whether or not the start is
     used, so the goals do not depend on ``random_starts``.
