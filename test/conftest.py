@@ -26,23 +26,14 @@ from typing import Any, Callable, Iterator, Mapping
 
 import pytest
 
-from trajplan_ros.tools.demo import PlannerProcess
+from trajplan_ros.tools.node_process import PlannerProcess, TIMEOUT_S, wait_until
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'trajplan_ros'
 #: Liveness bound for anything the tests wait on (discovery, a plan, a build step).
-LIVENESS_S = 60.0
+LIVENESS_S = TIMEOUT_S
 
-
-def wait_until(predicate: Callable[[], bool], timeout: float = LIVENESS_S,
-               what: str = 'condition') -> None:
-    """Poll ``predicate`` every 20 ms until it holds; fail after ``timeout`` seconds."""
-    tick = threading.Event()
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            pytest.fail(f'timed out after {timeout:.0f} s waiting for {what}')
-        tick.wait(0.02)
+__all__ = ['LIVENESS_S', 'Install', 'NodeProcess', 'wait_until']
 
 
 # --- environment and the colcon install ---------------------------------------------------------
@@ -151,99 +142,11 @@ def start_node(colcon_install: Install, ros_env: dict[str, str]) -> Iterator[Cal
 
 # --- the test process's side of DDS -------------------------------------------------------------
 
-class Peer:
-    """A node of the test process, spun on a background thread, to talk to the planner."""
-
-    def __init__(self) -> None:
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-
-        self._rclpy = rclpy
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        self.node = rclpy.create_node('trajplan_test_peer', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self._spinner = threading.Thread(target=self.executor.spin, daemon=True)
-        self._spinner.start()
-        self._clients: dict[str, Any] = {}
-        self._publishers: dict[str, Any] = {}
-        self._inboxes: dict[str, tuple[Any, queue.Queue[Any]]] = {}
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self._spinner.join(timeout=LIVENESS_S)
-        self.node.destroy_node()
-        self._rclpy.try_shutdown(context=self.context)
-
-    # services
-
-    def client(self, srv_type: Any, name: str) -> Any:
-        if name not in self._clients:
-            self._clients[name] = self.node.create_client(srv_type, name)
-        client = self._clients[name]
-        assert client.wait_for_service(timeout_sec=LIVENESS_S), f'service {name} not available'
-        return client
-
-    def call_async(self, srv_type: Any, name: str, request: Any) -> Any:
-        return self.client(srv_type, name).call_async(request)
-
-    @staticmethod
-    def result(future: Any, timeout: float = LIVENESS_S) -> Any:
-        done = threading.Event()
-        future.add_done_callback(lambda _: done.set())
-        assert done.wait(timeout), f'no answer within {timeout:.0f} s'
-        return future.result()
-
-    def call(self, srv_type: Any, name: str, request: Any, timeout: float = LIVENESS_S) -> Any:
-        return self.result(self.call_async(srv_type, name, request), timeout)
-
-    # parameters, through the node's parameter services
-
-    def set_parameters(self, node: str, params: list[Any], atomically: bool = False) -> list[Any]:
-        """Set rclpy ``Parameter`` objects on ``node`` (its full name); return the results."""
-        from rcl_interfaces.srv import SetParameters, SetParametersAtomically
-
-        msgs = [p.to_parameter_msg() for p in params]
-        if atomically:
-            return [self.call(SetParametersAtomically, f'{node}/set_parameters_atomically',
-                              SetParametersAtomically.Request(parameters=msgs)).result]
-        return self.call(SetParameters, f'{node}/set_parameters',
-                         SetParameters.Request(parameters=msgs)).results
-
-    def get_parameters(self, node: str, names: list[str], timeout: float = LIVENESS_S) -> list[Any]:
-        """Python values of the named parameters of ``node``."""
-        from rcl_interfaces.srv import GetParameters
-        from rclpy.parameter import parameter_value_to_python
-
-        answer = self.call(GetParameters, f'{node}/get_parameters',
-                           GetParameters.Request(names=names), timeout)
-        return [parameter_value_to_python(v) for v in answer.values]
-
-    # topics
-
-    def publisher(self, msg_type: Any, topic: str) -> Any:
-        """A publisher on ``topic``, once the planner subscribes to it."""
-        if topic not in self._publishers:
-            self._publishers[topic] = self.node.create_publisher(msg_type, topic, 10)
-        pub = self._publishers[topic]
-        wait_until(lambda: pub.get_subscription_count() > 0, what=f'a subscriber on {topic}')
-        return pub
-
-    def inbox(self, msg_type: Any, topic: str) -> queue.Queue[Any]:
-        """A queue of the messages arriving on ``topic``, once the planner publishes there."""
-        if topic not in self._inboxes:
-            box: queue.Queue[Any] = queue.Queue()
-            sub = self.node.create_subscription(msg_type, topic, box.put, 10)
-            self._inboxes[topic] = (sub, box)
-        sub, box = self._inboxes[topic]
-        wait_until(lambda: sub.get_publisher_count() > 0, what=f'a publisher on {topic}')
-        return box
-
-
 @pytest.fixture(scope='session')
-def peer(ros_env: dict[str, str]) -> Iterator[Peer]:
-    """The test process's ROS 2 node (its own context, in the session's DDS domain)."""
-    p = Peer()
-    yield p
-    p.close()
+def peer(ros_env: dict[str, str]) -> Iterator[Any]:
+    """The test process's ROS 2 node (``tools.ros_client.RosClient``) in the session's domain."""
+    from trajplan_ros.tools.ros_client import RosClient
+
+    client = RosClient('trajplan_test_peer')
+    yield client
+    client.close()

@@ -22,25 +22,20 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from trajplan_ros import paper_arm, plan
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.ros_client import plan_request, RosClient
 
-from conftest import LIVENESS_S, Install, NodeProcess, Peer, wait_until
+from conftest import Install, LIVENESS_S, NodeProcess, wait_until
 
 ARM = paper_arm()
 OMEGA = 0.2                                       # the node's default angular_velocity
-PAPER_GOAL = (0.151171, 0.19162, 0.172124)
+PAPER_GOAL = tuple(PAPER_TARGET.tolist())
 HOPELESS_GOAL = (0.05, -0.05, -0.25)              # inside the reach sphere, never reached
 
 
 def fmt(xyz: tuple[float, ...]) -> str:
     """A point as the node writes it in its log lines."""
     return re.escape('(' + ', '.join(f'{v:.6g}' for v in xyz) + ')')
-
-
-def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> GetPlan.Request:
-    request = GetPlan.Request()
-    request.goal.pose.position = Point(x=goal[0], y=goal[1], z=goal[2])
-    request.tolerance = tolerance
-    return request
 
 
 def started_from(node: NodeProcess, kind: str, goal: tuple[float, float, float],
@@ -114,7 +109,7 @@ def planner(start_node) -> Iterator[NodeProcess]:
 
 
 @pytest.fixture(scope='module')
-def trajectories(planner: NodeProcess, peer: Peer):
+def trajectories(planner: NodeProcess, peer: RosClient):
     return peer.inbox(JointTrajectory, '/joint_trajectory')
 
 

@@ -19,8 +19,10 @@ from trajectory_msgs.msg import JointTrajectory
 
 from trajplan_ros import ArmModel, paper_arm
 
-from conftest import LIVENESS_S, NodeProcess, Peer
-from test_node import (HOPELESS_GOAL, check_servo_trajectory, plan_request, started_from,
+from conftest import LIVENESS_S, NodeProcess
+from trajplan_ros.tools.ros_client import plan_request, RosClient
+
+from test_node import (HOPELESS_GOAL, check_servo_trajectory, started_from,
                        trajectory_to)
 
 NODE = '/arm_ns/trajplan'
@@ -36,7 +38,7 @@ def planner(start_node) -> Iterator[NodeProcess]:
 
 
 @pytest.fixture(scope='module')
-def trajectories(planner: NodeProcess, peer: Peer):
+def trajectories(planner: NodeProcess, peer: RosClient):
     return peer.inbox(JointTrajectory, TRAJECTORY)
 
 

@@ -1,7 +1,7 @@
 """
-Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.bench_node``.
+Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.tools.bench_node``.
 
-The node runs as a child process (``demo.PlannerProcess``: a DDS domain of its own, localhost
+The node runs as a child process (``node_process.PlannerProcess``: a DDS domain of its own, localhost
 discovery) with its default parameters; this process is its client.
 
 1. Service overhead. ``--calls`` plan_trajectory calls on tool positions of seeded random
@@ -36,16 +36,14 @@ import time
 from typing import Any, Sequence
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.srv import GetParameters
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.utilities import get_rmw_implementation_identifier
 
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.tools.demo import PlannerProcess, ros_environment
+from trajplan_ros.tools.node_process import PlannerProcess, ros_environment
+from trajplan_ros.tools.ros_client import RosClient
 from trajplan_ros.planning.planner import plan
 
 __all__ = ['main']
@@ -82,42 +80,22 @@ def _ms(seconds: float) -> str:
     return f'{1e3 * seconds:.2f} ms'
 
 
-class _Client:
-    """This process's ROS side: a node spun on a background thread, with blocking calls."""
+def _timed_call(ros: RosClient, client: Any, request: Any) -> tuple[Any | None, float]:
+    """
+    Call ``client``: (answer or None on timeout, round trip in s).
 
-    def __init__(self) -> None:
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        self.node = Node('trajplan_bench', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-
-    def call(self, client: Any, request: Any) -> tuple[Any | None, float]:
-        """
-        (answer or None on timeout, round trip in s): from sending the request to the
-        response callback, which runs in the executor thread as soon as the answer is in.
-        """
-        done = threading.Event()
-        arrived: list[float] = []
-
-        def on_answer(_: Any) -> None:
-            arrived.append(time.perf_counter())
-            done.set()
-
-        began = time.perf_counter()
-        future = client.call_async(request)
-        future.add_done_callback(on_answer)
-        if not done.wait(TIMEOUT_S):
-            return None, time.perf_counter() - began
-        return future.result(), arrived[0] - began
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self.thread.join(timeout=TIMEOUT_S)
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
+    The round trip runs from sending the request to the response callback, which runs in the
+    client's executor thread as soon as the answer is in.
+    """
+    arrived: list[float] = []
+    began = time.perf_counter()
+    future = client.call_async(request)
+    future.add_done_callback(lambda _: arrived.append(time.perf_counter()))
+    try:
+        answer = ros.result(future, TIMEOUT_S)
+    except TimeoutError:
+        return None, time.perf_counter() - began
+    return answer, arrived[0] - began
 
 
 def _in_process(goals: np.ndarray) -> list[float]:
@@ -131,7 +109,7 @@ def _in_process(goals: np.ndarray) -> list[float]:
     return times
 
 
-def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
+def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
            idle: bool) -> tuple[list[float], list[float], list[int]] | str:
     """
     Call plan_trajectory on each goal in turn: (round trips, logged plan times, poses in
@@ -142,7 +120,7 @@ def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
     for i, goal in enumerate(goals):
         request = GetPlan.Request()
         request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
-        answer, trip = ros.call(client, request)
+        answer, trip = _timed_call(ros, client, request)
         if answer is None:
             return f'no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}'
         trips.append(trip)
@@ -154,7 +132,7 @@ def _calls(node: PlannerProcess, ros: _Client, client: Any, goals: np.ndarray,
     return trips, [logged[_fmt(g)] for g in goals], sizes
 
 
-def _service_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
+def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
                    more_goals: np.ndarray) -> tuple[bool, list[str]]:
     client = ros.node.create_client(GetPlan, 'plan_trajectory')
     if not client.wait_for_service(timeout_sec=TIMEOUT_S):
@@ -199,7 +177,7 @@ def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
     return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ''
 
 
-def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
+def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
                   rate: float) -> tuple[bool, list[str]]:
     # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
     # when a shorter history is full
@@ -213,7 +191,7 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     nan = float('nan')
     while not node.matches(r'\]: goal #\d+ \(nan, nan, nan\) m from ') and time.monotonic() < deadline:
         publisher.publish(Point(x=nan, y=nan, z=nan))
-        ros.call(params, GetParameters.Request(names=['angular_velocity']))
+        _timed_call(ros, params, GetParameters.Request(names=['angular_velocity']))
         threading.Event().wait(0.05)
     wanted = {_fmt(g) for g in goals}
     settled: dict[str, str] = {}
@@ -223,7 +201,7 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
     def poll_parameters() -> None:
         request = GetParameters.Request(names=['angular_velocity'])
         while not stop.is_set():
-            answer, trip = ros.call(params, request)
+            answer, trip = _timed_call(ros, params, request)
             latencies.append(trip if answer is not None else float('inf'))
             stop.wait(0.01)
 
@@ -270,7 +248,7 @@ def _stream_phase(node: PlannerProcess, ros: _Client, goals: np.ndarray,
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m trajplan_ros.bench_node',
+    parser = argparse.ArgumentParser(prog='python -m trajplan_ros.tools.bench_node',
                                      description=__doc__.split('\n\n')[0])
     parser.add_argument('--calls', type=int, default=100, help='service calls (default 100)')
     parser.add_argument('--goals', type=int, default=200, help='streamed goals (default 200)')
@@ -284,12 +262,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     here = _in_process(call_goals)
     env = ros_environment()
     os.environ.update(env)
-    print(f'planner_node benchmark: python -m trajplan_ros.bench_node '
+    print(f'planner_node benchmark: python -m trajplan_ros.tools.bench_node '
           f"{' '.join(argv if argv is not None else sys.argv[1:])}".rstrip())
     print(f'machine: {platform.machine()}, {os.cpu_count()} CPUs, Python '
           f'{platform.python_version()}, {get_rmw_implementation_identifier()}')
     node = PlannerProcess(env=env)
-    ros = _Client()
+    ros = RosClient('trajplan_bench')
     try:
         met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
         print('\n'.join(service_lines[:5]))

@@ -6,7 +6,7 @@ import csv
 import json
 import sys
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 
@@ -14,7 +14,7 @@ from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import ALGORITHMS, DEFAULT_TOLERANCE, PlanResult, PlanStatus, plan
-from trajplan_ros.tools import bench, demo, figures
+from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import UsageError, finite_number
 
 __all__ = ['main', 'build_parser']
@@ -62,7 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='command', required=True)
     _add_plan(sub)
     # each subcommand imports its optional extras (scipy, matplotlib, rclpy) only when it runs
-    for add_parser in (bench.add_parser, figures.add_parser, _add_urdf, demo.add_parser):
+    for add_parser in (node_commands.add_call_parser, node_commands.add_goal_parser,
+                       bench.add_parser, figures.add_parser, _add_urdf, demo.add_parser):
         add_parser(sub)
     return parser
 
@@ -77,14 +78,27 @@ def _start_vector(values: Sequence[float] | None, n_joints: int) -> np.ndarray |
     return q
 
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _goal_lines(path: str) -> Iterator[tuple[int, list[str]]]:
+    """Yield (line number, fields) of the CSV's data lines: no blanks, comments or header row."""
     handle = sys.stdin if path == '-' else open(path, newline='', encoding='utf-8')
+    first = True
     with handle:
         for number, row in enumerate(csv.reader(handle), start=1):
             cells = [c.strip() for c in row]
             if not any(cells) or cells[0].startswith('#'):
                 continue
-            yield number, cells
+            header = first and not any(_is_number(c) for c in cells)     # e.g. x,y,z,q1,...
+            first = False
+            if not header:
+                yield number, cells
 
 
 def _parse_line(cells: list[str], n_joints: int) -> tuple[np.ndarray, np.ndarray | None]:
@@ -109,15 +123,28 @@ def _human(result: PlanResult) -> str:
     return '\n'.join(lines)
 
 
+def _record(result: PlanResult, line: int | None) -> dict[str, Any]:
+    """The JSON line of a plan: the same keys for every line (null where there is no value)."""
+    return {'line': line, **result.to_dict()}
+
+
+def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any]:
+    """The JSON line of a CSV line that gives no goal: a rejected plan without a goal."""
+    rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
+                          start=None, algorithm=args.algorithm, mode=args.mode)
+    return {**_record(rejected, line), 'goal': None}
+
+
 def _run_plan(args: argparse.Namespace) -> int:
     arm = paper_arm()
     settings = dict(arm=arm, mode=args.mode, algorithm=args.algorithm, seed=args.seed,
                     tolerance=args.tolerance)
     if args.goals is None:
         if len(args.xyz) != 3:
-            raise UsageError(f'give a goal as X Y Z (3 numbers) or --goals FILE, got {len(args.xyz)} number(s)')
+            raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
+                             f'got {len(args.xyz)} number(s)')
         result = plan(args.xyz, _start_vector(args.start, arm.n_joints), **settings)
-        print(json.dumps(result.to_dict()) if args.json else _human(result))
+        print(json.dumps(_record(result, None)) if args.json else _human(result))
         return 0 if result.success else 1
     if args.xyz:
         raise UsageError('give either X Y Z or --goals FILE, not both')
@@ -129,18 +156,16 @@ def _run_plan(args: argparse.Namespace) -> int:
     for number, cells in lines:
         try:
             goal, start = _parse_line(cells, arm.n_joints)
-            if start is None:
-                start = _start_vector(args.start, arm.n_joints)
-            result = plan(goal, start, **settings)
         except UsageError as exc:
             failures += 1
-            record = {'line': number, 'goal': None, 'success': False,
-                      'status': PlanStatus.REJECTED.value, 'message': f'line {number}: {exc}'}
+            record = _unparsed(number, str(exc), args)
             print(json.dumps(record) if args.json else record['message'])
             continue
+        if start is None:
+            start = _start_vector(args.start, arm.n_joints)
+        result = plan(goal, start, **settings)
         failures += not result.success
-        record = {'line': number, **result.to_dict()}
-        print(json.dumps(record) if args.json else _human(result))
+        print(json.dumps(_record(result, number)) if args.json else _human(result))
     return 0 if failures == 0 else 1
 
 
@@ -152,6 +177,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (UsageError, ValueError) as exc:
         print(f'trajplan: error: {exc}', file=sys.stderr)
         return 2
+    except TimeoutError as exc:
+        print(f'trajplan: {exc}', file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
 

@@ -1,0 +1,136 @@
+"""
+A ROS 2 node of this process, spun on a background thread, for talking to the planner node.
+
+One helper for every client of the planner outside the node itself: ``trajplan call``,
+``trajplan goal``, ``trajplan demo``, the node benchmark and the integration tests. Its calls
+block with timeouts and raise ``TimeoutError`` with the reason, so a script never hangs.
+"""
+from __future__ import annotations
+
+import queue
+import threading
+from typing import Any
+
+import rclpy
+from geometry_msgs.msg import Point
+from nav_msgs.srv import GetPlan
+from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
+from rclpy.duration import Duration
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter, parameter_value_to_python
+
+from trajplan_ros.tools.node_process import TIMEOUT_S, wait_until
+
+__all__ = ['RosClient', 'plan_request']
+
+
+def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> GetPlan.Request:
+    """Build a GetPlan request for a tool goal (m, the planner's base frame)."""
+    request = GetPlan.Request(tolerance=float(tolerance))
+    request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
+    return request
+
+
+class RosClient:
+    """A node in a context of its own, spun by a SingleThreadedExecutor on a daemon thread."""
+
+    def __init__(self, name: str = 'trajplan_client') -> None:
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(name, context=self.context)
+        self._executor = SingleThreadedExecutor(context=self.context)
+        self._executor.add_node(self.node)
+        self._spinner = threading.Thread(target=self._executor.spin, daemon=True)
+        self._spinner.start()
+        self._clients: dict[str, Any] = {}
+        self._publishers: dict[str, Any] = {}
+        self._inboxes: dict[str, tuple[Any, queue.Queue[Any]]] = {}
+
+    def close(self) -> None:
+        """Stop spinning and shut the context down."""
+        self._executor.shutdown()
+        self._spinner.join(timeout=TIMEOUT_S)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self) -> RosClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- services ---------------------------------------------------------------------------
+
+    def client(self, srv_type: Any, name: str, timeout: float = TIMEOUT_S) -> Any:
+        """A client of service ``name``, once the service is there."""
+        if name not in self._clients:
+            self._clients[name] = self.node.create_client(srv_type, name)
+        client = self._clients[name]
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise TimeoutError(f'no service {name} within {timeout:g} s')
+        return client
+
+    def call_async(self, srv_type: Any, name: str, request: Any,
+                   timeout: float = TIMEOUT_S) -> Any:
+        """Send ``request`` to service ``name``; return the future of its answer."""
+        return self.client(srv_type, name, timeout).call_async(request)
+
+    @staticmethod
+    def result(future: Any, timeout: float = TIMEOUT_S) -> Any:
+        """Wait for the answer of ``future``."""
+        done = threading.Event()
+        future.add_done_callback(lambda _: done.set())
+        if not done.wait(timeout):
+            raise TimeoutError(f'no answer within {timeout:g} s')
+        return future.result()
+
+    def call(self, srv_type: Any, name: str, request: Any, timeout: float = TIMEOUT_S) -> Any:
+        """Call service ``name`` and wait for its answer."""
+        return self.result(self.call_async(srv_type, name, request, timeout), timeout)
+
+    def get_parameters(self, node: str, names: list[str],
+                       timeout: float = TIMEOUT_S) -> list[Any]:
+        """Python values of the named parameters of ``node`` (its full name)."""
+        answer = self.call(GetParameters, f'{node}/get_parameters',
+                           GetParameters.Request(names=names), timeout)
+        return [parameter_value_to_python(v) for v in answer.values]
+
+    def set_parameters(self, node: str, params: list[Parameter],
+                       atomically: bool = False) -> list[Any]:
+        """Set ``params`` on ``node`` (its full name); return the SetParametersResult list."""
+        msgs = [p.to_parameter_msg() for p in params]
+        if atomically:
+            return [self.call(SetParametersAtomically, f'{node}/set_parameters_atomically',
+                              SetParametersAtomically.Request(parameters=msgs)).result]
+        return self.call(SetParameters, f'{node}/set_parameters',
+                         SetParameters.Request(parameters=msgs)).results
+
+    # --- topics -----------------------------------------------------------------------------
+
+    def publisher(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S,
+                  depth: int = 10) -> Any:
+        """A reliable publisher on ``topic``, once a subscriber has matched it."""
+        if topic not in self._publishers:
+            self._publishers[topic] = self.node.create_publisher(msg_type, topic, depth)
+        pub = self._publishers[topic]
+        wait_until(lambda: pub.get_subscription_count() > 0, timeout,
+                   f'a subscriber on {topic}')
+        return pub
+
+    def publish(self, msg_type: Any, topic: str, msg: Any, timeout: float = TIMEOUT_S) -> None:
+        """Publish ``msg`` once a subscriber has matched, and wait until every one has it."""
+        pub = self.publisher(msg_type, topic, timeout)
+        pub.publish(msg)
+        if not pub.wait_for_all_acked(Duration(seconds=timeout)):
+            raise TimeoutError(f'the subscribers on {topic} did not acknowledge within '
+                               f'{timeout:g} s')
+
+    def inbox(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S) -> queue.Queue[Any]:
+        """A queue of the messages arriving on ``topic``, once a publisher has matched."""
+        if topic not in self._inboxes:
+            box: queue.Queue[Any] = queue.Queue()
+            sub = self.node.create_subscription(msg_type, topic, box.put, 10)
+            self._inboxes[topic] = (sub, box)
+        sub, box = self._inboxes[topic]
+        wait_until(lambda: sub.get_publisher_count() > 0, timeout, f'a publisher on {topic}')
+        return box
