@@ -12,21 +12,18 @@ and every node share one DDS domain chosen from the pid, with discovery kept on 
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import os
-import queue
+from pathlib import Path
 import re
 import signal
 import subprocess
 import sys
-import threading
-import time
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
 import pytest
-
 from trajplan_ros.tools.node_process import PlannerProcess, TIMEOUT_S, wait_until
+
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'trajplan_ros'
@@ -59,8 +56,9 @@ class Install:
         return self.prefix / 'lib' / PACKAGE / 'planner_node'
 
     def env(self, base: Mapping[str, str]) -> dict[str, str]:
-        """``base`` plus what ``source install/setup.bash`` adds (the venv is the underlay)."""
-        site = self.prefix / 'lib' / f'python{sys.version_info.major}.{sys.version_info.minor}' / 'site-packages'
+        """Return ``base`` plus what ``source install/setup.bash`` adds (venv as underlay)."""
+        python = f'python{sys.version_info.major}.{sys.version_info.minor}'
+        site = self.prefix / 'lib' / python / 'site-packages'
         env = dict(base)
         env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(site), base.get('PYTHONPATH')]))
         env['AMENT_PREFIX_PATH'] = os.pathsep.join([str(self.prefix), sys.prefix])
@@ -94,7 +92,7 @@ class NodeProcess(PlannerProcess):
             return '\n'.join(self.lines)
 
     def mark(self) -> int:
-        """A position in the output; ``wait_for(..., after=mark)`` looks only at later lines."""
+        """Return a position in the output; ``wait_for(..., after=mark)`` looks after it."""
         with self._cond:
             return len(self.lines)
 
@@ -105,7 +103,7 @@ class NodeProcess(PlannerProcess):
             return any(regex.search(line) for line in self.lines[after:])
 
     def wait_for(self, pattern: str, after: int = 0, timeout: float = LIVENESS_S) -> re.Match[str]:
-        """The first line at or after ``after`` that ``pattern`` (a regex) matches; else fail."""
+        """Return the first line at or after ``after`` matching ``pattern`` (a regex), or fail."""
         found = super().wait_for(pattern, timeout, after)
         if found is None:
             state = 'exited' if self.proc.poll() is not None else 'still running'
@@ -118,9 +116,10 @@ class NodeProcess(PlannerProcess):
 
 
 @pytest.fixture(scope='session')
-def start_node(colcon_install: Install, ros_env: dict[str, str]) -> Iterator[Callable[..., NodeProcess]]:
+def start_node(colcon_install: Install,
+               ros_env: dict[str, str]) -> Iterator[Callable[..., NodeProcess]]:
     """
-    Factory: ``start_node(*ros_args, ready=True)`` runs the installed planner_node.
+    Give a factory that runs the installed planner_node: ``start(*ros_args, ready=True)``.
 
     With ``ready`` it waits for the node's "ready" log line. Every node started is stopped
     (SIGINT, then SIGKILL) at the end of the session if a test has not stopped it.
@@ -144,7 +143,7 @@ def start_node(colcon_install: Install, ros_env: dict[str, str]) -> Iterator[Cal
 
 @pytest.fixture(scope='session')
 def peer(ros_env: dict[str, str]) -> Iterator[Any]:
-    """The test process's ROS 2 node (``tools.ros_client.RosClient``) in the session's domain."""
+    """Give the test process a ROS 2 node (``tools.ros_client.RosClient``) in the domain."""
     from trajplan_ros.tools.ros_client import RosClient
 
     client = RosClient('trajplan_test_peer')

@@ -4,8 +4,8 @@ import subprocess
 import sys
 
 import pytest
-
 from trajplan_ros.tools.cli import main
+
 
 TARGET = ['0.151171', '0.19162', '0.172124']
 
@@ -49,6 +49,7 @@ def test_bad_arguments_exit_2_with_one_line(argv, reason, capsys):
 
 
 def test_argparse_errors_exit_2():
-    proc = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'plan', '0.1', 'nan', '0.1'],
+    proc = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'plan', '0.1', 'nan',
+                           '0.1'],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and 'not a finite number' in proc.stderr

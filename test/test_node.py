@@ -14,18 +14,17 @@ import sys
 import time
 from typing import Iterator
 
-import numpy as np
-import pytest
+from conftest import Install, LIVENESS_S, NodeProcess, wait_until
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
+import numpy as np
+import pytest
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
-
 from trajplan_ros import paper_arm, plan
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
-from conftest import Install, LIVENESS_S, NodeProcess, wait_until
 
 ARM = paper_arm()
 OMEGA = 0.2                                       # the node's default angular_velocity
@@ -34,21 +33,22 @@ HOPELESS_GOAL = (0.05, -0.05, -0.25)              # inside the reach sphere, nev
 
 
 def fmt(xyz: tuple[float, ...]) -> str:
-    """A point as the node writes it in its log lines."""
+    """Write a point as the node does in its log lines, as a regex."""
     return re.escape('(' + ', '.join(f'{v:.6g}' for v in xyz) + ')')
 
 
 def started_from(node: NodeProcess, kind: str, goal: tuple[float, float, float],
                  after: int) -> tuple[str, np.ndarray]:
-    """The label and start angles of the plan the node logged for ``goal`` after ``after``."""
+    """Return the label and start angles of the plan the node logged for ``goal``."""
     m = node.wait_for(rf'\]: ({kind} #\d+) {fmt(goal)} m from q = \(([^)]*)\) rad: ', after)
     return m.group(1), np.array([float(v) for v in m.group(2).split(',')])
 
 
 def trajectory_to(box, goal: tuple[float, float, float], arm=ARM, tol: float = 1e-5):
     """
-    The next trajectory in ``box`` that ends at ``goal`` (one from an earlier plan may still be
-    on its way: the node publishes just after answering).
+    Return the next trajectory in ``box`` that ends at ``goal``.
+
+    One from an earlier plan may still be on its way: the node publishes just after answering.
     """
     deadline = time.monotonic() + LIVENESS_S
     while True:

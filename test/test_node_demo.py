@@ -1,6 +1,8 @@
 """
-``trajplan demo`` end to end: it starts planner_node, plans the paper's example through the
-service, prints the plan and the trajectory, and stops the node it started.
+``trajplan demo`` end to end.
+
+It starts planner_node, plans the paper's example through the service, prints the plan and
+the trajectory, and stops the node it started.
 """
 from __future__ import annotations
 
@@ -9,21 +11,24 @@ import re
 import subprocess
 import sys
 
-from conftest import LIVENESS_S, Install
+from conftest import Install, LIVENESS_S
 
 
 def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, tmp_path) -> None:
     env = colcon_install.env(os.environ)
     # as after `source install/setup.bash`: planner_node is found on the PATH
     env['PATH'] = os.pathsep.join([str(colcon_install.executable.parent), env.get('PATH', '')])
-    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path, env=env,
+    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path,
+                          env=env,
                           capture_output=True, text=True, timeout=3 * LIVENESS_S)
     out = done.stdout
     assert done.returncode == 0, out + done.stderr
     # the demo prefers planner_node beside this Python (a pip venv), else the one on the PATH
-    assert re.search(r'^started \S*/planner_node \(pid \d+\), ROS_DOMAIN_ID=\d+, localhost discovery',
+    assert re.search(r'^started \S*/planner_node \(pid \d+\), ROS_DOMAIN_ID=\d+, '
+                     r'localhost discovery',
                      out, re.M), out
-    assert re.search(r'planned joint angles \[rad\]: joint1=\S+ +joint2=\S+ +joint3=\S+ +joint4=\S+ '
+    assert re.search(r'planned joint angles \[rad\]: joint1=\S+ +joint2=\S+ +joint3=\S+ '
+                     r'+joint4=\S+ '
                      r'+joint5=\+0\.000000', out), out
     assert re.search(r'motion time: \d+\.\d{4} s', out)
     error = float(re.search(r'position error: (\S+) m', out).group(1))

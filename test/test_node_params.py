@@ -10,20 +10,17 @@ import math
 import re
 from typing import Iterator
 
-import numpy as np
-import pytest
+from conftest import LIVENESS_S, NodeProcess
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
+import numpy as np
+import pytest
 from rclpy.parameter import Parameter
+from test_node import check_servo_trajectory, HOPELESS_GOAL, started_from, trajectory_to
 from trajectory_msgs.msg import JointTrajectory
-
 from trajplan_ros import ArmModel, paper_arm
-
-from conftest import LIVENESS_S, NodeProcess
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
-from test_node import (HOPELESS_GOAL, check_servo_trajectory, started_from,
-                       trajectory_to)
 
 NODE = '/arm_ns/trajplan'
 TRAJECTORY = '/jtc/joint_trajectory'
@@ -43,8 +40,10 @@ def trajectories(planner: NodeProcess, peer: RosClient):
 
 
 def arm_parameters(arm: ArmModel, start: list[float]) -> list[Parameter]:
-    values = {f'arm.{k}': getattr(arm, k).tolist() for k in ('a', 'alpha', 'd', 'offset', 'lower', 'upper')}
-    values.update({'arm.sign': [int(s) for s in arm.sign], 'arm.joint_names': list(arm.joint_names),
+    values = {f'arm.{k}': getattr(arm, k).tolist()
+              for k in ('a', 'alpha', 'd', 'offset', 'lower', 'upper')}
+    values.update({'arm.sign': [int(s) for s in arm.sign],
+                   'arm.joint_names': list(arm.joint_names),
                    'arm.planned': arm.planned, 'start_positions': start})
     return [Parameter(name, value=value) for name, value in values.items()]
 
@@ -88,7 +87,8 @@ def test_a_valid_change_takes_effect_for_the_next_plan(planner, peer, trajectori
     ('arm.lower', [3.0, -1.5, -2.3, -2.3, -3.1], r'joint 1: lower limit 3.0 is above upper limit'),
     ('arm.a', [0.01, math.inf, 0.096, 0.027, 0.0], r'a has a non-finite value'),
     ('arm.sign', [1, 1, 1, 2, 1], r'sign must be \+1 or -1 per joint'),
-    ('arm.joint_names', ['j1', 'j2', 'j3', 'j4'], r'joint_names must be 5 distinct non-empty names'),
+    ('arm.joint_names', ['j1', 'j2', 'j3', 'j4'],
+     r'joint_names must be 5 distinct non-empty names'),
     ('arm.planned', 6, r'planned joints must be between 2 and 5, got 6'),
     ('arm.alpha', [0.0, 0.0, 0.0], r'alpha needs 5 values'),
     ('start_positions', [0.0, 0.0, 0.0, 0.0], r'start_positions needs 5 finite angles'),
@@ -102,8 +102,9 @@ def test_a_bad_value_is_rejected_with_its_reason(planner, peer, name, value, rea
 
 
 def test_an_arm_with_other_joints_is_set_in_one_atomic_call(planner, peer, trajectories) -> None:
-    arm = ArmModel(a=[0.0, 0.12, 0.10, 0.05], alpha=[math.pi / 2, 0.0, 0.0, 0.0], d=[0.08, 0, 0, 0],
-                   lower=[-2.0] * 4, upper=[2.0] * 4, joint_names=['q1', 'q2', 'q3', 'q4'], planned=4)
+    arm = ArmModel(a=[0.0, 0.12, 0.10, 0.05], alpha=[math.pi / 2, 0.0, 0.0, 0.0],
+                   d=[0.08, 0, 0, 0], lower=[-2.0] * 4, upper=[2.0] * 4,
+                   joint_names=['q1', 'q2', 'q3', 'q4'], planned=4)
     change = arm_parameters(arm, [0.0] * 4)
     # one at a time, every step is an inconsistent arm: refused
     [first] = peer.set_parameters(NODE, change[:1])
@@ -131,8 +132,8 @@ def test_not_reached_gives_an_empty_plan_and_tolerance_counts(planner, peer) -> 
         mark = planner.mark()
         answer = peer.call(GetPlan, '/arm_ns/plan_trajectory', plan_request(HOPELESS_GOAL))
         assert list(answer.plan.poses) == []
-        planner.wait_for(r'service call #\d+ \(0.05, -0.05, -0.25\) m from .*: not_reached: goal not '
-                         r'reached: best error .* is above the tolerance 1e-06 m', mark)
+        planner.wait_for(r'service call #\d+ \(0.05, -0.05, -0.25\) m from .*: not_reached: '
+                         r'goal not reached: best error .* is above the tolerance 1e-06 m', mark)
         # the same goal with a request tolerance of 10 cm counts as reached
         answer = peer.call(GetPlan, '/arm_ns/plan_trajectory', plan_request(HOPELESS_GOAL, 0.1))
         assert answer.plan.poses
@@ -147,7 +148,8 @@ def test_not_reached_gives_an_empty_plan_and_tolerance_counts(planner, peer) -> 
     ('angular_velocity:=-1.0', r'invalid parameters: .*angular_velocity'),
     ('arm.planned:=9', r'invalid parameters: .*arm.planned'),
 ])
-def test_bad_parameters_at_startup_end_the_node_with_the_reason(start_node, override, reason) -> None:
+def test_bad_parameters_at_startup_end_the_node_with_the_reason(start_node, override,
+                                                                reason) -> None:
     node = start_node('-p', override, ready=False)
     assert node.proc.wait(timeout=LIVENESS_S) == 2
     node.stop()

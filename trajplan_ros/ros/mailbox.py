@@ -7,10 +7,11 @@ callback waits on the job's ``done`` event for its answer.
 from __future__ import annotations
 
 import collections
-import threading
 from dataclasses import dataclass
+import threading
 
 from nav_msgs.msg import Path
+
 
 __all__ = ['Job', 'Mailbox']
 
@@ -18,8 +19,10 @@ __all__ = ['Job', 'Mailbox']
 @dataclass
 class Job:
     """
-    One goal for the worker. For a service call, ``done`` is set once ``path`` is final and
-    ``answered`` once the service callback has taken it.
+    One goal for the worker.
+
+    For a service call, ``done`` is set once ``path`` is final and ``answered`` once the
+    service callback has taken it.
     """
 
     label: str

@@ -3,28 +3,30 @@ from __future__ import annotations
 
 import array
 
-import numpy as np
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
+import numpy as np
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import Trajectory
+
 
 __all__ = ['path_msg', 'quaternions', 'trajectory_msg']
 
 
 def quaternions(rot: np.ndarray) -> np.ndarray:
     """
-    Unit quaternions (x, y, z, w) of rotation matrices (N, 3, 3).
+    Convert rotation matrices (N, 3, 3) to unit quaternions, (N, 4) as x, y, z, w.
 
     Builds K = 4 q q^T (q = (w, x, y, z)) from the matrix entries and takes the row of its
     largest diagonal entry, which is well conditioned for every rotation.
     """
     m00, m11, m22 = rot[:, 0, 0], rot[:, 1, 1], rot[:, 2, 2]
-    wx, wy, wz = rot[:, 2, 1] - rot[:, 1, 2], rot[:, 0, 2] - rot[:, 2, 0], rot[:, 1, 0] - rot[:, 0, 1]
-    xy, xz, yz = rot[:, 0, 1] + rot[:, 1, 0], rot[:, 0, 2] + rot[:, 2, 0], rot[:, 1, 2] + rot[:, 2, 1]
+    wx, wy, wz = (rot[:, 2, 1] - rot[:, 1, 2], rot[:, 0, 2] - rot[:, 2, 0],
+                  rot[:, 1, 0] - rot[:, 0, 1])
+    xy, xz, yz = (rot[:, 0, 1] + rot[:, 1, 0], rot[:, 0, 2] + rot[:, 2, 0],
+                  rot[:, 1, 2] + rot[:, 2, 1])
     k = np.stack([
         np.stack([1 + m00 + m11 + m22, wx, wy, wz], axis=-1),
         np.stack([wx, 1 + m00 - m11 - m22, xy, xz], axis=-1),
@@ -38,7 +40,7 @@ def quaternions(rot: np.ndarray) -> np.ndarray:
 
 
 def trajectory_msg(traj: Trajectory) -> JointTrajectory:
-    """The JointTrajectory of ``traj``; header.stamp stays zero ("start now")."""
+    """Build the JointTrajectory of ``traj``; header.stamp stays zero ("start now")."""
     msg = JointTrajectory(joint_names=list(traj.joint_names))
     nanoseconds = np.round(traj.times * 1e9).astype(np.int64).tolist()
     points = []
@@ -53,7 +55,7 @@ def trajectory_msg(traj: Trajectory) -> JointTrajectory:
 def path_msg(arm: ArmModel, traj: Trajectory, header: Header,
              blanks: list[PoseStamped] | None = None) -> Path:
     """
-    The tool path of ``traj``: one pose per trajectory point, from forward kinematics.
+    Build the tool path of ``traj``: one pose per trajectory point, by forward kinematics.
 
     The poses share ``header`` and are filled in place, taken from ``blanks`` (new
     PoseStamped messages made in advance) while it lasts: building a message costs more than

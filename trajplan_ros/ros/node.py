@@ -27,13 +27,13 @@ import sys
 import threading
 from typing import Any, Sequence
 
-import numpy as np
-import rclpy
 from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
+import numpy as np
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
+import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
@@ -44,11 +44,11 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory
-
 from trajplan_ros.planning import plan
 from trajplan_ros.ros.mailbox import Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
+
 
 __all__ = ['PlannerNode', 'main']
 
@@ -72,7 +72,7 @@ def _fmt(xyz: Sequence[float]) -> str:
 
 
 def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
-    """The ParameterDescriptor of a parameter: its description and its range or choices."""
+    """Build the descriptor of a parameter: its description and its range or choices."""
     descriptor = ParameterDescriptor(description=spec.description)
     if spec.choices:
         descriptor.additional_constraints = 'one of: ' + ', '.join(spec.choices)
@@ -165,8 +165,9 @@ class PlannerNode(Node):
         update = {n: float(q) for n, q in zip(msg.name, msg.position) if n in ours}
         bad = [n for n, q in update.items() if not math.isfinite(q)]
         if bad:
-            self.get_logger().warning(f"ignored joint_states: non-finite position for {', '.join(bad)}",
-                                   throttle_duration_sec=5.0)
+            self.get_logger().warning(
+                f"ignored joint_states: non-finite position for {', '.join(bad)}",
+                throttle_duration_sec=5.0)
             return
         with self._state_lock:
             self._measured.update(update)
@@ -175,8 +176,8 @@ class PlannerNode(Node):
                       response: GetPlan.Response) -> GetPlan.Response:
         p = request.goal.pose.position
         job = Job(f'service call #{next(self._call_ids)}', (p.x, p.y, p.z),
-                   tolerance=request.tolerance if request.tolerance > 0 else None,
-                   done=threading.Event(), answered=threading.Event())
+                  tolerance=request.tolerance if request.tolerance > 0 else None,
+                  done=threading.Event(), answered=threading.Event())
         if self._mailbox.put_call(job):
             job.done.wait()
         response.plan = job.path if job.path is not None else Path(
@@ -190,10 +191,11 @@ class PlannerNode(Node):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=frame_id)
 
     def _start(self, settings: Settings) -> np.ndarray:
-        """Per joint: joint_states, else the last published trajectory's end, else the parameter."""
+        """Return, per joint, joint_states, else the last trajectory's end, else the parameter."""
         with self._state_lock:
             known = {**self._last_end, **self._measured}
-        return np.array([known.get(n, q) for n, q in zip(settings.arm.joint_names, settings.start)])
+        names = settings.arm.joint_names
+        return np.array([known.get(n, q) for n, q in zip(names, settings.start)])
 
     def _work(self) -> None:
         while True:
@@ -204,15 +206,18 @@ class PlannerNode(Node):
             try:
                 self._plan(job)
             except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
-                self.get_logger().error(f'{job.label} {_fmt(job.goal)} m: planning failed: {exc!r}')
+                self.get_logger().error(
+                    f'{job.label} {_fmt(job.goal)} m: planning failed: {exc!r}')
             finally:
                 self._answer(job)
 
     @staticmethod
     def _answer(job: Job, path: Path | None = None) -> None:
         """
-        Hand a service call its path (None: an empty plan) once, and wait until the service
-        callback has taken it, so the answer goes out before this thread carries on.
+        Hand a service call its path (None: an empty plan) once.
+
+        Then wait until the service callback has taken it, so the answer goes out before this
+        thread carries on.
         """
         if job.done is not None and not job.done.is_set():
             job.path = path
@@ -232,7 +237,8 @@ class PlannerNode(Node):
         if not result.success:
             self._answer(job)
             optimised = f'; {took}' if result.joint_goal is not None else ''
-            self.get_logger().warning(f'{where}: {result.status.value}: {result.message}{optimised}')
+            self.get_logger().warning(
+                f'{where}: {result.status.value}: {result.message}{optimised}')
             return
         traj = result.trajectory(s.arm, s.sample_period)
         if job.done is not None:

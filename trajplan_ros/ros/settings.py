@@ -12,10 +12,10 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
-
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning import ALGORITHMS, DEFAULT_TOLERANCE, Mode
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
+
 
 __all__ = ['PARAMETERS', 'ParameterSpec', 'Settings', 'default_values']
 
@@ -46,7 +46,8 @@ def _arm_specs() -> list[ParameterSpec]:
         ParameterSpec('arm.sign', [int(s) for s in arm.sign],
                       'joint direction signs (+1 or -1) in theta_i = sign_i q_i + offset_i'),
         ParameterSpec('arm.joint_names', list(arm.joint_names),
-                      'joint names, base to tool, as in joint_states and the published trajectory'),
+                      'joint names, base to tool, as in joint_states and the published '
+                      'trajectory'),
         ParameterSpec('arm.planned', arm.planned,
                       'how many leading joints are planned; the rest hold', bounds=(2, 7)),
         ParameterSpec('start_positions', [0.0] * arm.n_joints,

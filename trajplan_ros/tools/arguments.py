@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import math
 
+
 __all__ = ['UsageError', 'finite_number', 'positive_count']
 
 

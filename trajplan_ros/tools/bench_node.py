@@ -1,8 +1,8 @@
 """
 Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.tools.bench_node``.
 
-The node runs as a child process (``node_process.PlannerProcess``: a DDS domain of its own, localhost
-discovery) with its default parameters; this process is its client.
+The node runs as a child process (``node_process.PlannerProcess``: a DDS domain of its own,
+localhost discovery) with its default parameters; this process is its client.
 
 1. Service overhead. ``--calls`` plan_trajectory calls on tool positions of seeded random
    in-limit configurations, each sent when the node is idle (it has logged the call before, its
@@ -35,16 +35,16 @@ import threading
 import time
 from typing import Any, Sequence
 
-import numpy as np
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
+import numpy as np
 from rcl_interfaces.srv import GetParameters
 from rclpy.utilities import get_rmw_implementation_identifier
-
 from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.planner import plan
 from trajplan_ros.tools.node_process import PlannerProcess, ros_environment
 from trajplan_ros.tools.ros_client import RosClient
-from trajplan_ros.planning.planner import plan
+
 
 __all__ = ['main']
 
@@ -56,7 +56,7 @@ TIMEOUT_S = 120.0
 
 
 def _fmt(xyz: Sequence[float]) -> str:
-    """A point as the node writes it in its log lines."""
+    """Write a point as the node does in its log lines."""
     return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
 
 
@@ -112,8 +112,10 @@ def _in_process(goals: np.ndarray) -> list[float]:
 def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
            idle: bool) -> tuple[list[float], list[float], list[int]] | str:
     """
-    Call plan_trajectory on each goal in turn: (round trips, logged plan times, poses in
-    each answer), or the reason it failed. With ``idle``, each call waits until the node has
+    Call plan_trajectory on each goal in turn.
+
+    Return (round trips, logged plan times, poses in each answer), or the reason it failed.
+    With ``idle``, each call waits until the node has
     logged the one before, its last step (publishing and logging follow the answer).
     """
     trips, sizes = [], []
@@ -172,7 +174,7 @@ def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
 
 
 def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
-    """The goals (numbered from 1 in sending order) neither planned nor dropped, if any."""
+    """List the goals (numbered from 1 in sending order) neither planned nor dropped."""
     lost = [f'#{i} {_fmt(g)}' for i, g in enumerate(goals, 1) if _fmt(g) not in settled]
     return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ''
 
@@ -189,7 +191,8 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
     # sides may not have matched each other yet, and a first sample could be lost
     deadline = time.monotonic() + TIMEOUT_S
     nan = float('nan')
-    while not node.matches(r'\]: goal #\d+ \(nan, nan, nan\) m from ') and time.monotonic() < deadline:
+    warmed = r'\]: goal #\d+ \(nan, nan, nan\) m from '
+    while not node.matches(warmed) and time.monotonic() < deadline:
         publisher.publish(Point(x=nan, y=nan, z=nan))
         _timed_call(ros, params, GetParameters.Request(names=['angular_velocity']))
         threading.Event().wait(0.05)

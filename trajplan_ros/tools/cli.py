@@ -4,18 +4,19 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import sys
 from pathlib import Path
+import sys
 from typing import Any, Iterator, Sequence
 
 import numpy as np
-
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
-from trajplan_ros.planning.planner import ALGORITHMS, DEFAULT_TOLERANCE, PlanResult, PlanStatus, plan
+from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, plan, PlanResult,
+                                           PlanStatus)
 from trajplan_ros.tools import bench, demo, figures, node_commands
-from trajplan_ros.tools.arguments import UsageError, finite_number
+from trajplan_ros.tools.arguments import finite_number, UsageError
+
 
 __all__ = ['main', 'build_parser']
 
@@ -33,15 +34,16 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--algorithm', choices=list(ALGORITHMS), default='iepso')
     p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
     p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
-                   help=f'largest error in metres that counts as reached (default {DEFAULT_TOLERANCE})')
+                   help='largest error in metres that counts as reached '
+                        f'(default {DEFAULT_TOLERANCE})')
     p.add_argument('--json', action='store_true', help='print one JSON object a line')
     p.set_defaults(run=_run_plan)
 
 
 def _add_urdf(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser('urdf', help='print the arm as a URDF (for robot_state_publisher and RViz)',
-                       description='Print the default (paper) arm as a URDF whose joint values are '
-                                   "the planner's joint angles q.")
+                       description='Print the default (paper) arm as a URDF whose joint values '
+                                   "are the planner's joint angles q.")
     p.add_argument('-o', '--output', metavar='FILE', help='write to FILE instead of printing')
     p.add_argument('--name', default='paper_arm', help='robot name (default paper_arm)')
     p.set_defaults(run=_run_urdf)
@@ -119,17 +121,18 @@ def _human(result: PlanResult) -> str:
         lines.append('joint goal [rad]: ' + ' '.join(f'{v:+.6f}' for v in result.joint_goal))
         lines.append(f'motion time {result.motion_time_s:.4f} s, position error '
                      f'{result.position_error_m:.3g} m, efficiency F {result.efficiency:.4f}, '
-                     f'{result.iterations} iterations, planned in {1e3 * result.plan_time_s:.1f} ms')
+                     f'{result.iterations} iterations, '
+                     f'planned in {1e3 * result.plan_time_s:.1f} ms')
     return '\n'.join(lines)
 
 
 def _record(result: PlanResult, line: int | None) -> dict[str, Any]:
-    """The JSON line of a plan: the same keys for every line (null where there is no value)."""
+    """Return the JSON line of a plan: the same keys every time (null where no value)."""
     return {'line': line, **result.to_dict()}
 
 
 def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any]:
-    """The JSON line of a CSV line that gives no goal: a rejected plan without a goal."""
+    """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
                           start=None, algorithm=args.algorithm, mode=args.mode)
     return {**_record(rejected, line), 'goal': None}
@@ -137,8 +140,8 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any
 
 def _run_plan(args: argparse.Namespace) -> int:
     arm = paper_arm()
-    settings = dict(arm=arm, mode=args.mode, algorithm=args.algorithm, seed=args.seed,
-                    tolerance=args.tolerance)
+    settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
+                'tolerance': args.tolerance}
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '

@@ -14,9 +14,10 @@ import os
 import sys
 
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
-from trajplan_ros.tools.arguments import UsageError, finite_number
+from trajplan_ros.tools.arguments import finite_number, UsageError
 from trajplan_ros.tools.node_commands import call_planner
 from trajplan_ros.tools.node_process import PlannerProcess, ros_environment
+
 
 __all__ = ['add_parser']
 

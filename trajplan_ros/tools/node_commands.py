@@ -15,7 +15,8 @@ import math
 import queue
 from typing import Any
 
-from trajplan_ros.tools.arguments import UsageError, finite_number
+from trajplan_ros.tools.arguments import finite_number, UsageError
+
 
 __all__ = ['add_call_parser', 'add_goal_parser', 'call_planner', 'print_trajectory']
 
@@ -73,7 +74,6 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     """
     from nav_msgs.srv import GetPlan
     from trajectory_msgs.msg import JointTrajectory
-
     from trajplan_ros.tools.ros_client import plan_request
 
     box = ros.inbox(JointTrajectory, trajectory_topic, timeout) if trajectory_topic else None
@@ -103,12 +103,12 @@ def _run_goal(args: argparse.Namespace) -> int:
     _need_rclpy()
     from geometry_msgs.msg import Point
     from trajectory_msgs.msg import JointTrajectory
-
     from trajplan_ros.tools.ros_client import RosClient
 
     x, y, z = args.xyz
     with RosClient('trajplan_goal') as ros:
-        box = ros.inbox(JointTrajectory, args.trajectory, args.timeout) if args.trajectory else None
+        box = (ros.inbox(JointTrajectory, args.trajectory, args.timeout) if args.trajectory
+               else None)
         ros.publish(Point, args.topic, Point(x=x, y=y, z=z), args.timeout)
         print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
         if box is not None:
@@ -129,7 +129,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def add_call_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan call``: the planning service, as ``ros2 service call`` would."""
-    p = sub.add_parser('call', help='call a running planner node\'s plan_trajectory service',
+    p = sub.add_parser('call', help="call a running planner node's plan_trajectory service",
                        description='Send a GetPlan request to a running planner node and print '
                                    'the answer. Exit status 0: a plan; 1: an empty plan or no '
                                    'answer in time.')

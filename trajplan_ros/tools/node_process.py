@@ -7,6 +7,7 @@ rclpy: the child process is the node; talking to it over DDS is ``ros_client``'s
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import re
 import shutil
 import signal
@@ -14,8 +15,8 @@ import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 from typing import Callable, Mapping, Sequence
+
 
 __all__ = ['TIMEOUT_S', 'PlannerProcess', 'planner_command', 'ros_environment', 'wait_until']
 
@@ -36,8 +37,10 @@ def wait_until(predicate: Callable[[], bool], timeout: float = TIMEOUT_S,
 
 def planner_command() -> list[str]:
     """
-    How to start the node: ``planner_node`` beside this Python (a venv's bin), else on PATH,
-    else ``python -m trajplan_ros.ros.node`` (a source checkout).
+    Return the command that starts the node.
+
+    That is ``planner_node`` beside this Python (a venv's bin), else on PATH, else
+    ``python -m trajplan_ros.ros.node`` (a source checkout).
     """
     beside = Path(sys.executable).with_name('planner_node')
     if beside.is_file() and os.access(beside, os.X_OK):
@@ -48,9 +51,11 @@ def planner_command() -> list[str]:
 
 def ros_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
     """
-    ``base`` (default os.environ) with a DDS domain of this process's own (1..100, from the
-    pid), localhost-only discovery, and this Python's prefix on AMENT_PREFIX_PATH (where the
-    pip-installed ROS 2 packages register themselves).
+    Return ``base`` (default os.environ) set up for a node of this process's own.
+
+    That is a DDS domain of this process's own (1..100, from the pid), localhost-only
+    discovery, and this Python's prefix on AMENT_PREFIX_PATH (where the pip-installed ROS 2
+    packages register themselves).
     """
     env = dict(os.environ if base is None else base)
     env['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 100)
@@ -94,7 +99,7 @@ class PlannerProcess:
             self._cond.notify_all()
 
     def wait_for(self, pattern: str, timeout: float, after: int = 0) -> re.Match[str] | None:
-        """The first log line from index ``after`` on matching ``pattern``; None on timeout or exit."""
+        """Return the first log line from ``after`` on matching ``pattern``; None on timeout."""
         regex = re.compile(pattern)
         found: list[re.Match[str]] = []
 

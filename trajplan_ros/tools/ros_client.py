@@ -11,15 +11,15 @@ import queue
 import threading
 from typing import Any
 
-import rclpy
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
+import rclpy
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
-
 from trajplan_ros.tools.node_process import TIMEOUT_S, wait_until
+
 
 __all__ = ['RosClient', 'plan_request']
 
@@ -62,7 +62,7 @@ class RosClient:
     # --- services ---------------------------------------------------------------------------
 
     def client(self, srv_type: Any, name: str, timeout: float = TIMEOUT_S) -> Any:
-        """A client of service ``name``, once the service is there."""
+        """Return a client of service ``name``, once the service is there."""
         if name not in self._clients:
             self._clients[name] = self.node.create_client(srv_type, name)
         client = self._clients[name]
@@ -109,7 +109,7 @@ class RosClient:
 
     def publisher(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S,
                   depth: int = 10) -> Any:
-        """A reliable publisher on ``topic``, once a subscriber has matched it."""
+        """Return a reliable publisher on ``topic``, once a subscriber has matched it."""
         if topic not in self._publishers:
             self._publishers[topic] = self.node.create_publisher(msg_type, topic, depth)
         pub = self._publishers[topic]
@@ -126,7 +126,7 @@ class RosClient:
                                f'{timeout:g} s')
 
     def inbox(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S) -> queue.Queue[Any]:
-        """A queue of the messages arriving on ``topic``, once a publisher has matched."""
+        """Return a queue of the messages arriving on ``topic``, once a publisher matched."""
         if topic not in self._inboxes:
             box: queue.Queue[Any] = queue.Queue()
             sub = self.node.create_subscription(msg_type, topic, box.put, 10)

@@ -1,0 +1,82 @@
+"""
+The node's parameter table, its params.yaml and its checking, without DDS.
+
+``ros.settings.PARAMETERS`` is what the node declares; ``config/params.yaml`` must list every
+one of them with the same default, so that the file a user copies is the node's truth.
+"""
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from trajplan_ros import paper_arm
+from trajplan_ros.kinematics import InvalidArmModel
+from trajplan_ros.ros.settings import default_values, PARAMETERS, Settings
+import yaml
+
+
+PARAMS_YAML = Path(__file__).resolve().parents[1] / 'config' / 'params.yaml'
+
+
+def flatten(tree: dict[str, Any], prefix: str = '') -> dict[str, Any]:
+    """Nested YAML keys as the dotted parameter names ROS gives them."""
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        if isinstance(value, dict):
+            out.update(flatten(value, f'{prefix}{key}.'))
+        else:
+            out[f'{prefix}{key}'] = value
+    return out
+
+
+def test_params_yaml_lists_every_parameter_with_its_default() -> None:
+    document = yaml.safe_load(PARAMS_YAML.read_text(encoding='utf-8'))
+    assert list(document) == ['/**']                 # any node name, any namespace
+    values = flatten(document['/**']['ros__parameters'])
+    assert values == default_values()
+    # the same types too: ROS refuses an integer where a double was declared
+    for name, value in values.items():
+        expected = default_values()[name]
+        assert type(value) is type(expected), name
+        if isinstance(value, list):
+            assert [type(v) for v in value] == [type(v) for v in expected], name
+
+
+def test_every_parameter_has_a_description_and_a_unique_name() -> None:
+    names = [spec.name for spec in PARAMETERS]
+    assert len(names) == len(set(names))
+    assert all(spec.description for spec in PARAMETERS)
+    for spec in PARAMETERS:
+        if spec.bounds is not None:
+            assert spec.bounds[0] <= spec.default <= spec.bounds[1], spec.name
+        if spec.choices:
+            assert spec.default in spec.choices, spec.name
+
+
+def test_defaults_give_the_paper_arm() -> None:
+    settings = Settings.from_parameters(default_values())
+    arm = paper_arm()
+    for key in ('a', 'alpha', 'd', 'sign', 'offset', 'lower', 'upper'):
+        np.testing.assert_array_equal(getattr(settings.arm, key), getattr(arm, key))
+    assert settings.arm.joint_names == arm.joint_names
+    assert (settings.omega, settings.mode, settings.algorithm, settings.seed) == (
+        0.2, 'free', 'iepso', 0)
+    np.testing.assert_array_equal(settings.start, np.zeros(5))
+
+
+@pytest.mark.parametrize('change, error, reason', [
+    ({'mode': 'sideways'}, ValueError, r"mode must be one of free, radial, got 'sideways'"),
+    ({'algorithm': 'sa'}, ValueError, r'algorithm must be one of iepso, pso, spso, ga, de'),
+    ({'base_frame': ''}, ValueError, r'base_frame must not be empty'),
+    ({'start_positions': [0.0] * 4}, ValueError, r'start_positions needs 5 finite angles'),
+    ({'start_positions': [0.0, np.nan, 0, 0, 0]}, ValueError, r'needs 5 finite angles'),
+    ({'arm.sign': [1, 1, 1, 2, 1]}, InvalidArmModel, r'sign must be \+1 or -1'),
+    ({'arm.planned': 6}, InvalidArmModel, r'planned joints must be between 2 and 5'),
+])
+def test_bad_values_are_refused_with_the_reason(change, error, reason) -> None:
+    with pytest.raises(error, match=reason):
+        Settings.from_parameters({**default_values(), **change})
+
+
+def test_seed_minus_one_means_a_fresh_seed() -> None:
+    assert Settings.from_parameters({**default_values(), 'seed': -1}).seed is None
