@@ -179,16 +179,13 @@ def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
     return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ''
 
 
-def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
-                  rate: float) -> tuple[bool, list[str]]:
-    # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
-    # when a shorter history is full
-    publisher = ros.node.create_publisher(Point, 'goal', len(goals))
-    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters')
-    if not params.wait_for_service(timeout_sec=TIMEOUT_S):
-        return False, ['no parameter service']
-    # warm up: until the node has logged a goal from this publisher (refused at once), the two
-    # sides may not have matched each other yet, and a first sample could be lost
+def _warm_up(node: PlannerProcess, ros: RosClient, publisher: Any, params: Any) -> None:
+    """
+    Publish refused goals until the node has logged one.
+
+    Until then the two sides may not have matched each other yet, and a first sample could be
+    lost.
+    """
     deadline = time.monotonic() + TIMEOUT_S
     nan = float('nan')
     warmed = r'\]: goal #\d+ \(nan, nan, nan\) m from '
@@ -196,25 +193,12 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
         publisher.publish(Point(x=nan, y=nan, z=nan))
         _timed_call(ros, params, GetParameters.Request(names=['angular_velocity']))
         threading.Event().wait(0.05)
+
+
+def _settle(node: PlannerProcess, goals: np.ndarray) -> dict[str, str]:
+    """Wait until every goal is logged as planned or dropped (or time out): how each went."""
     wanted = {_fmt(g) for g in goals}
     settled: dict[str, str] = {}
-    latencies: list[float] = []
-    stop = threading.Event()
-
-    def poll_parameters() -> None:
-        request = GetParameters.Request(names=['angular_velocity'])
-        while not stop.is_set():
-            answer, trip = _timed_call(ros, params, request)
-            latencies.append(trip if answer is not None else float('inf'))
-            stop.wait(0.01)
-
-    poller = threading.Thread(target=poll_parameters, daemon=True)
-    poller.start()
-    began = time.perf_counter()
-    for i, goal in enumerate(goals):
-        publisher.publish(Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2])))
-        time.sleep(max(0.0, began + (i + 1) / rate - time.perf_counter()))
-    sent = time.perf_counter() - began
 
     def accounted() -> bool:
         for m in node.matches(r'\]: goal #\d+ (\([^)]*\)) m from '):
@@ -226,9 +210,13 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
     deadline = time.monotonic() + TIMEOUT_S
     while not accounted() and time.monotonic() < deadline:
         threading.Event().wait(0.05)
-    stop.set()
-    poller.join(timeout=TIMEOUT_S)
+    return settled
 
+
+def _stream_report(node: PlannerProcess, goals: np.ndarray, settled: dict[str, str],
+                   latencies: list[float], rate: float, sent: float) -> tuple[bool, list[str]]:
+    """Judge the goal stream: every goal accounted for, every parameter get prompt."""
+    wanted = {_fmt(g) for g in goals}
     planned = sum(1 for g in wanted if settled.get(g) == 'planned')
     dropped = sum(1 for g in wanted if settled.get(g) == 'dropped')
     missing = len(wanted) - planned - dropped
@@ -248,6 +236,39 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
         f"{'met' if worst <= MAX_PARAMETER_LATENCY_S else 'NOT MET'}",
     ]
     return all_met, lines
+
+
+def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
+                  rate: float) -> tuple[bool, list[str]]:
+    """Publish ``goals`` at ``rate`` Hz while a parameter get goes out every 10 ms."""
+    # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
+    # when a shorter history is full
+    publisher = ros.node.create_publisher(Point, 'goal', len(goals))
+    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters')
+    if not params.wait_for_service(timeout_sec=TIMEOUT_S):
+        return False, ['no parameter service']
+    _warm_up(node, ros, publisher, params)
+    latencies: list[float] = []
+    stop = threading.Event()
+
+    def poll_parameters() -> None:
+        request = GetParameters.Request(names=['angular_velocity'])
+        while not stop.is_set():
+            answer, trip = _timed_call(ros, params, request)
+            latencies.append(trip if answer is not None else float('inf'))
+            stop.wait(0.01)
+
+    poller = threading.Thread(target=poll_parameters, daemon=True)
+    poller.start()
+    began = time.perf_counter()
+    for i, goal in enumerate(goals):
+        publisher.publish(Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2])))
+        time.sleep(max(0.0, began + (i + 1) / rate - time.perf_counter()))   # the goal rate
+    sent = time.perf_counter() - began
+    settled = _settle(node, goals)
+    stop.set()
+    poller.join(timeout=TIMEOUT_S)
+    return _stream_report(node, goals, settled, latencies, rate, sent)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
