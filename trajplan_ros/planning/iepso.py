@@ -1,55 +1,70 @@
 """
 IEPSO: PSO with a local-global information-sharing term and last-elimination (section III).
 
-Velocity and position updates, eq. (3)-(5):
+The paper's algorithm, in its symbols: each particle has a position x (the planned joint
+angles), a velocity v and the best position it has visited, p_i; p_g is the best of those in
+its swarm. Every iteration, for every particle and joint, eq. (3)-(5):
 
-    phi3 = C3 R3 |p_g - p_i|
-    v <- w v + C1 R1 (p_i - x) + C2 R2 (p_g - x) + phi3
-    x <- x + v
+    phi3 = c3 r3 |p_g - p_i|                                   (3), ``_velocity_update``
+    v <- w v + c1 r1 (p_i - x) + c2 r2 (p_g - x) + phi3        (4), ``_velocity_update``
+    x <- x + v                                                 (5), ``_move``
 
-with the inertia w falling from 0.9 to 0.4 and C3 from 2 to 0 over ``max_iter`` iterations,
-C1 = C2 = 2, R1..R3 uniform in [0, 1] (Table 4). Last-elimination: every ``elimination_period``
-iterations the worst ``elimination`` fraction of each swarm (by current F) is replaced by new
-particles drawn inside the joint limits.
+with the inertia weight w falling linearly from 0.9 to 0.4 and the acceleration coefficient c3
+from 2 to 0 over ``max_iter`` iterations, c1 = c2 = 2, and r1, r2, r3 uniform in [0, 1]
+(Table 4). phi3 is the local-global information-sharing term. Last-elimination
+(``_last_elimination``): every ``elimination_period`` iterations the worst ``elimination``
+fraction of each swarm is replaced by new particles drawn inside the joint limits.
+
+Details the paper leaves open, as we fill them in: r1..r3 are drawn anew for every particle and
+joint; the initial velocities are uniform within the velocity cap, each component capped at
+``max_velocity`` of its joint's range; a position outside the joint limits is clipped to them
+and that velocity component set to 0; last-elimination ranks particles by F at their positions
+when last evaluated, and the new particles start at rest; without the polish the run stops by
+``History.stalled``, the paper's convergence precision (``tol``).
 
 Additions of ours, documented in the README, each on by default because it measurably helps:
 
 * several independent swarms advance in one array (``swarms``: 16, or 24 in radial mode), so
-  the vectorised cost of an iteration barely grows;
-* a memetic polish: every ``polish_period`` iterations each swarm's best particle and
-  ``polish_count - 1`` random members (5, or 9 in radial mode; for diversity: the polish from a
-  random member often lands on a solution branch the swarm has not settled on) are refined by
-  ``polish.polish`` (exact reach, least motion time along the solutions, at most
+  the vectorised cost of an iteration barely grows (``_Swarms``);
+* a memetic polish (``_polish_round``): every ``polish_period`` iterations each swarm's best
+  particle and ``polish_count - 1`` random members (5, or 9 in radial mode; for diversity: the
+  polish from a random member often lands on a solution branch the swarm has not settled on)
+  are refined by ``polish.polish`` (exact reach, least motion time along the solutions, at most
   ``polish_steps`` steps: 8, or 6 in radial mode); the best refined one goes back into its
   swarm, which carries on from there;
-* swarm-level last-elimination (``restart``): after a polish round, swarms whose best is worse
-  than the overall best by more than ``tol`` are drawn anew;
-* the run stops after a polish round when at least ``agreement`` of the refined candidates have
-  settled on the goal (error at most ``SETTLED``, 1e-14 m) with the best motion time
-  (independent starting points agreeing), or when the best F has improved by less than
+* swarm-level last-elimination (``restart``, ``_restart``): after a polish round, swarms whose
+  best is worse than the overall best by more than ``tol`` are drawn anew;
+* the run stops after a polish round (``_Stopping``) when at least ``agreement`` of the refined
+  candidates have settled on the goal (error at most ``SETTLED``, 1e-14 m) with the best motion
+  time (independent starting points agreeing), or when the best F has improved by less than
   ``tol`` for ``patience_rounds`` rounds (three times as many while the goal is not reached;
   the paper's convergence precision), or after ``max_iter`` iterations. F itself is not
   compared for agreement: eq. (17) changes it by 0.024 per picometre of error, far below any
   meaningful difference;
-* a curve search when the run stops on an answer that fewer than ``curve_search`` (15) refined
-  candidates agree on: with one free direction (free mode with four planned joints, radial mode
-  with five) the solutions through the answer form a curve, cut into arcs by the joint limits,
-  and the motion time along it can have several local minima that a local polish cannot see;
-  where radial solutions are isolated, the others on the position-only curve through the
-  answer are where its axis residual changes sign. ``polish.curve_minima`` follows the curve
-  both ways through the limits, the polish refines the seeds it returns, and a faster solution
-  replaces the answer. In tuning runs searching after stronger agreement too found nothing
-  more, at a higher cost; ``curve_search=0`` turns it off;
+* a curve search (``_curve_search``) when the run stops on an answer that fewer than
+  ``curve_search`` (15) refined candidates agree on: with one free direction (free mode with
+  four planned joints, radial mode with five) the solutions through the answer form a curve,
+  cut into arcs by the joint limits, and the motion time along it can have several local
+  minima that a local polish cannot see; where radial solutions are isolated, the others on the
+  position-only curve through the answer are where its axis residual changes sign.
+  ``polish.curve_minima`` follows the curve both ways through the limits, the polish refines
+  the seeds it returns, and a faster solution replaces the answer. In tuning runs searching
+  after stronger agreement too found nothing more, at a higher cost; ``curve_search=0`` turns
+  it off;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
-  has a shorter motion time: in tuning runs, many fewer polish steps at the same success rate.
+  has a shorter motion time (``_polish_is_enough``): in tuning runs, many fewer polish steps at
+  the same success rate.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
 import numpy as np
 
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.optimize import History, OptimizeResult, initial_population
+from trajplan_ros.planning.objective import Evaluation, Objective
+from trajplan_ros.planning.optimize import History, initial_population, OptimizeResult
 from trajplan_ros.planning.polish import curve_minima, polish as polish_candidates
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
@@ -69,11 +84,73 @@ RADIAL_DEFAULTS = {'swarms': 24, 'polish_count': 10, 'polish_steps': 6}
 #: reward differs by less than 3e-4 s.
 SETTLED = 1e-14
 
+#: The polish's early stop: called with each candidate's motion time, error and whether its
+#: steps are still accepted; True ends the polish round.
+_Enough = Callable[[np.ndarray, np.ndarray, np.ndarray], bool]
+
+
+@dataclass
+class _Swarms:
+    """
+    All swarms' particles, as arrays with axes (swarm, particle) or (swarm, particle, joint).
+
+    ``x`` and ``v`` are the positions and velocities, ``f`` F (eq. 9) at the positions as last
+    evaluated; ``pbest`` holds each particle's best position p_i, ``pbest_f`` and ``pbest_err``
+    its F and error; ``gbest_index`` (swarm,) is the particle whose p_i is its swarm's p_g.
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    f: np.ndarray
+    pbest: np.ndarray
+    pbest_f: np.ndarray
+    pbest_err: np.ndarray
+    gbest_index: np.ndarray
+    rows: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.rows = np.arange(self.x.shape[0])
+
+    @property
+    def gbest(self) -> np.ndarray:
+        """Return each swarm's best position p_g, (swarm, joint)."""
+        return self.pbest[self.rows, self.gbest_index]
+
+    @property
+    def gbest_f(self) -> np.ndarray:
+        """Return F at each swarm's p_g, (swarm,)."""
+        return self.pbest_f[self.rows, self.gbest_index]
+
+    def best_swarm(self) -> int:
+        """Return the swarm whose p_g has the least F (the first, on a tie)."""
+        return int(np.argmin(self.gbest_f))
+
+    def best(self) -> tuple[float, float]:
+        """Return F and the error of the best p_g of all swarms."""
+        s = self.best_swarm()
+        g = self.gbest_index[s]
+        return float(self.pbest_f[s, g]), float(self.pbest_err[s, g])
+
+    def replace_gbest(self, swarms: np.ndarray | int, x: np.ndarray, f: np.ndarray | float,
+                      error: np.ndarray | float) -> None:
+        """Overwrite p_g of ``swarms`` (it stays their best: callers pass only better ones)."""
+        g = self.gbest_index[swarms]
+        self.pbest[swarms, g] = x
+        self.pbest_f[swarms, g] = f
+        self.pbest_err[swarms, g] = error
+
+
+def _linear(bounds: tuple[float, float], frac: float) -> float:
+    """Return the value ``frac`` (0 to 1) of the way from ``bounds[0]`` to ``bounds[1]``."""
+    return bounds[0] + (bounds[1] - bounds[0]) * frac
+
 
 def _agreeing(motion_time: np.ndarray, error: np.ndarray) -> tuple[int, float]:
     """
-    How many candidates have settled on the goal (error <= ``SETTLED``) within 1e-6 of the
-    best such motion time, and that best time (inf when none has).
+    Count the candidates that agree on the answer.
+
+    They have settled on the goal (error <= ``SETTLED``) within 1e-6 of the best such motion
+    time. Return their number and that best time (0 and inf when none has settled).
     """
     reached = error <= SETTLED
     if not reached.any():
@@ -82,22 +159,176 @@ def _agreeing(motion_time: np.ndarray, error: np.ndarray) -> tuple[int, float]:
     return int(np.count_nonzero(reached & (motion_time <= best * (1 + 1e-6)))), float(best)
 
 
-def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-          seed: int | np.random.Generator | None = None, swarms: int | None = None, polish: bool = True,
-          polish_period: int = 5, polish_count: int | None = None, polish_steps: int | None = None,
-          agreement: int = 4, patience_rounds: int = 4, restart: bool = True,
-          curve_search: int = 15,
-          elimination: float = 0.1, elimination_period: int = 5,
-          inertia: tuple[float, float] = (0.9, 0.4), c1: float = 2.0, c2: float = 2.0,
-          c3: tuple[float, float] = (2.0, 0.0), max_velocity: float = 0.2) -> OptimizeResult:
+def _polish_is_enough(agreement: int, near: float) -> _Enough:
     """
-    Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
+    Build the polish's early stop.
 
-    ``max_velocity`` caps each velocity component at that fraction of the joint's range.
-    ``swarms``, ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``). Without ``polish`` this is the paper's algorithm alone, stopped by
-    ``History.stalled``.
+    Stop once ``agreement`` candidates agree and no candidate still converging (within
+    ``near`` of the goal, not settled, its steps still accepted) is faster than their answer.
     """
+    def enough(motion_time: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
+        agree, best_time = _agreeing(motion_time, error)
+        return agree >= agreement and not np.any(active & (error > SETTLED) & (error < near)
+                                                 & (motion_time < best_time))
+    return enough
+
+
+def _start(obj: Objective, rng: np.random.Generator, swarms: int, population: int,
+           vmax: np.ndarray) -> _Swarms:
+    """Draw the particles inside the joint limits, velocities within +-vmax, and evaluate."""
+    x = initial_population(rng, obj.lower, obj.upper, (swarms, population))
+    v = (2 * rng.random(x.shape) - 1) * vmax
+    ev = obj(x.reshape(-1, x.shape[-1]))
+    f = ev.efficiency.reshape(swarms, population)
+    err = ev.error.reshape(swarms, population)
+    return _Swarms(x=x, v=v, f=f, pbest=x.copy(), pbest_f=f.copy(), pbest_err=err.copy(),
+                   gbest_index=np.argmin(f, axis=1))
+
+
+def _velocity_update(swarm: _Swarms, rng: np.random.Generator, w: float, c1: float, c2: float,
+                     c3: float, vmax: np.ndarray) -> None:
+    """
+    Update the velocities by eq. (3)-(4), each component then capped at +-vmax.
+
+    ``w`` and ``c3`` are this iteration's values; r1, r2, r3 are drawn for every particle and
+    joint.
+    """
+    x, pbest = swarm.x, swarm.pbest
+    gbest = swarm.gbest[:, None, :]
+    r1, r2, r3 = rng.random((3,) + x.shape)
+    phi3 = c3 * r3 * np.abs(gbest - pbest)                                     # eq. (3)
+    v = w * swarm.v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x) + phi3     # eq. (4)
+    np.clip(v, -vmax, vmax, out=v)
+    swarm.v = v
+
+
+def _move(swarm: _Swarms, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Move the particles by eq. (5), clipped to the joint limits (a clipped joint stops)."""
+    x = swarm.x + swarm.v                                                      # eq. (5)
+    outside = (x < lower) | (x > upper)
+    swarm.x = np.clip(x, lower, upper)
+    swarm.v[outside] = 0.0
+
+
+def _last_elimination(swarm: _Swarms, rng: np.random.Generator, lower: np.ndarray,
+                      upper: np.ndarray, count: int) -> None:
+    """
+    Replace the ``count`` worst particles of each swarm by new ones, at rest.
+
+    Worst by F at their positions when last evaluated; the new positions are uniform within
+    the joint limits. The personal bests p_i stay.
+    """
+    population = swarm.f.shape[1]
+    worst = np.argsort(swarm.f, axis=1)[:, population - count:]
+    rows = swarm.rows[:, None]
+    swarm.x[rows, worst] = initial_population(rng, lower, upper, (rows.size, count))
+    swarm.v[rows, worst] = 0.0
+
+
+def _evaluate(swarm: _Swarms, obj: Objective) -> int:
+    """Evaluate F at the positions, update p_i and p_g; return the number of evaluations."""
+    ev = obj(swarm.x.reshape(-1, swarm.x.shape[-1]))
+    swarm.f = ev.efficiency.reshape(swarm.pbest_f.shape)
+    err = ev.error.reshape(swarm.pbest_f.shape)
+    better = swarm.f < swarm.pbest_f
+    swarm.pbest = np.where(better[..., None], swarm.x, swarm.pbest)
+    swarm.pbest_f = np.where(better, swarm.f, swarm.pbest_f)
+    swarm.pbest_err = np.where(better, err, swarm.pbest_err)
+    swarm.gbest_index = np.argmin(swarm.pbest_f, axis=1)
+    return swarm.f.size
+
+
+def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, count: int,
+                  steps: int, enough: _Enough) -> Evaluation:
+    """
+    Polish each swarm's p_g and ``count - 1`` random members' p_i (ours).
+
+    The best refined candidate of each swarm replaces its p_g, and that particle's position,
+    where it is better. Return the evaluation of all refined candidates.
+    """
+    swarms, population, dim = swarm.x.shape
+    members = np.concatenate((swarm.gbest_index[:, None],
+                              rng.integers(0, population, (swarms, count - 1))), axis=1)
+    refined = polish_candidates(obj, swarm.pbest[swarm.rows[:, None], members].reshape(-1, dim),
+                                max_steps=steps, enough=enough)
+    ev = obj(refined)
+    refined_f = ev.efficiency.reshape(swarms, -1)
+    pick = np.argmin(refined_f, axis=1)
+    new_f = refined_f[swarm.rows, pick]
+    gain = new_f < swarm.gbest_f
+    chosen = refined.reshape(swarms, -1, dim)[swarm.rows, pick][gain]
+    swarm.x[swarm.rows[gain], swarm.gbest_index[gain]] = chosen
+    swarm.replace_gbest(swarm.rows[gain], chosen, new_f[gain],
+                        ev.error.reshape(swarms, -1)[swarm.rows, pick][gain])
+    return ev
+
+
+def _restart(swarm: _Swarms, obj: Objective, rng: np.random.Generator, tol: float) -> int:
+    """
+    Draw anew, at rest, the swarms whose p_g is worse than the best by more than ``tol`` (ours).
+
+    Swarm-level last-elimination. Return the number of evaluations.
+    """
+    gbest_f = swarm.gbest_f
+    lost = swarm.rows[gbest_f > gbest_f.min() + tol]
+    if not lost.size:
+        return 0
+    population = swarm.x.shape[1]
+    swarm.x[lost] = initial_population(rng, obj.lower, obj.upper, (lost.size, population))
+    swarm.v[lost] = 0.0
+    ev = obj(swarm.x[lost].reshape(-1, swarm.x.shape[-1]))
+    swarm.pbest[lost] = swarm.x[lost]
+    swarm.pbest_f[lost] = ev.efficiency.reshape(-1, population)
+    swarm.pbest_err[lost] = ev.error.reshape(-1, population)
+    swarm.f[lost] = swarm.pbest_f[lost]
+    swarm.gbest_index = np.argmin(swarm.pbest_f, axis=1)
+    return lost.size * population
+
+
+def _curve_search(swarm: _Swarms, obj: Objective, steps: int) -> None:
+    """Polish the motion-time minima along the best p_g's curve; keep a better one (ours)."""
+    s = swarm.best_swarm()
+    g = swarm.gbest_index[s]
+    seeds = curve_minima(obj, swarm.pbest[s, g])
+    if not len(seeds):
+        return
+    found = polish_candidates(obj, seeds, max_steps=steps)
+    ev = obj(found)
+    i = int(np.argmin(ev.efficiency))
+    if ev.efficiency[i] < swarm.pbest_f[s, g]:
+        swarm.replace_gbest(s, found[i], ev.efficiency[i], ev.error[i])
+
+
+@dataclass
+class _Stopping:
+    """
+    The stopping rule, asked after each polish round (ours; see the module docstring).
+
+    Stop when ``agreement`` refined candidates agree on a reached goal, or when the best F has
+    improved by less than ``tol`` for ``patience_rounds`` rounds (three times as many while the
+    goal is not reached, error above ``eps``).
+    """
+
+    tol: float
+    patience_rounds: int
+    agreement: int
+    eps: float
+    last_best: float = np.inf
+    stable_rounds: int = 0
+
+    def after_round(self, best: float, best_err: float, agree: int) -> tuple[bool, bool]:
+        """Record the round's best F and its error; return (stop, goal reached)."""
+        self.stable_rounds = self.stable_rounds + 1 if self.last_best - best < self.tol else 0
+        self.last_best = best
+        reached = best_err <= self.eps
+        patience = self.patience_rounds * (1 if reached else 3)
+        return self.stable_rounds >= patience or (reached and agree >= self.agreement), reached
+
+
+def _settings(obj: Objective, population: int, max_iter: int, polish_period: int,
+              swarms: int | None, polish_count: int | None, polish_steps: int | None
+              ) -> tuple[int, int, int]:
+    """Return ``swarms``, ``polish_count`` and ``polish_steps``, the mode's defaults for None."""
     defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
     swarms = defaults['swarms'] if swarms is None else swarms
     polish_count = defaults['polish_count'] if polish_count is None else polish_count
@@ -105,125 +336,61 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError('population must be >= 2; swarms, max_iter, polish_count and '
                          'polish_period >= 1')
+    return swarms, polish_count, polish_steps
+
+
+def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
+          seed: int | np.random.Generator | None = None, swarms: int | None = None,
+          polish: bool = True, polish_period: int = 5, polish_count: int | None = None,
+          polish_steps: int | None = None, agreement: int = 4, patience_rounds: int = 4,
+          restart: bool = True, curve_search: int = 15, elimination: float = 0.1,
+          elimination_period: int = 5, inertia: tuple[float, float] = (0.9, 0.4),
+          c1: float = 2.0, c2: float = 2.0, c3: tuple[float, float] = (2.0, 0.0),
+          max_velocity: float = 0.2) -> OptimizeResult:
+    """
+    Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
+
+    ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
+    each velocity component at that fraction of the joint's range. ``swarms``,
+    ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
+    ``RADIAL_DEFAULTS``). Without ``polish`` this is the paper's algorithm alone, stopped by
+    ``History.stalled``.
+    """
+    swarms, polish_count, polish_steps = _settings(obj, population, max_iter, polish_period,
+                                                   swarms, polish_count, polish_steps)
     rng = np.random.default_rng(seed)
-    lo, hi = obj.lower, obj.upper
-    span = hi - lo
-    vmax = max_velocity * span
-    s, p, dim = swarms, population, lo.size
-    n_elim = int(round(elimination * p))
-    rows = np.arange(s)
-
-    x = initial_population(rng, lo, hi, (s, p))
-    v = (2 * rng.random((s, p, dim)) - 1) * vmax
-    ev = obj(x.reshape(-1, dim))
-    f = ev.efficiency.reshape(s, p)
-    err = ev.error.reshape(s, p)
-    nfev = s * p
-    pbest, pbest_f, pbest_err = x.copy(), f.copy(), err.copy()
-    g_idx = np.argmin(pbest_f, axis=1)
+    vmax = max_velocity * (obj.upper - obj.lower)
+    eliminated = int(round(elimination * population))
+    swarm = _start(obj, rng, swarms, population, vmax)
+    nfev = swarm.f.size
     history = History(max_iter, tol, patience=50, eps=obj.shaping.eps)
-    last_polished = np.inf
-    stable_rounds = 0
-    converged = stop = False
-
-    near = obj.arm.reach / 8
-
-    def enough(r: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
-        # polish early stop: agreement, and no candidate still converging (near the goal and not
-        # stalled) is faster than the agreed one
-        agree, best_r = _agreeing(r, error)
-        return agree >= agreement and not np.any(active & (error > SETTLED)
-                                                 & (error < near) & (r < best_r))
-
+    stopping = _Stopping(tol, patience_rounds, agreement, obj.shaping.eps)
+    enough = _polish_is_enough(agreement, obj.arm.reach / 8)
+    stop = converged = False
     for it in range(max_iter):
+        # the paper's iteration: eq. (3)-(5) and last-elimination, with w and c3 scheduled
         frac = it / max(max_iter - 1, 1)
-        w = inertia[0] + (inertia[1] - inertia[0]) * frac
-        k3 = c3[0] + (c3[1] - c3[0]) * frac
-        gbest = pbest[rows, g_idx][:, None, :]
-        r1, r2, r3 = rng.random((3, s, p, dim))
-        v = (w * v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
-             + k3 * r3 * np.abs(gbest - pbest))                        # eq. (3)-(4)
-        np.clip(v, -vmax, vmax, out=v)
-        x = x + v                                                       # eq. (5)
-        outside = (x < lo) | (x > hi)
-        x = np.clip(x, lo, hi)
-        v[outside] = 0.0
-        if n_elim and (it + 1) % elimination_period == 0:               # last-elimination
-            worst = np.argsort(f, axis=1)[:, p - n_elim:]
-            x[rows[:, None], worst] = initial_population(rng, lo, hi, (s, n_elim))
-            v[rows[:, None], worst] = 0.0
-        ev = obj(x.reshape(-1, dim))
-        f = ev.efficiency.reshape(s, p)
-        err = ev.error.reshape(s, p)
-        nfev += s * p
-        better = f < pbest_f
-        pbest = np.where(better[..., None], x, pbest)
-        pbest_f = np.where(better, f, pbest_f)
-        pbest_err = np.where(better, err, pbest_err)
-        g_idx = np.argmin(pbest_f, axis=1)
-
-        if polish and (it + 1) % polish_period == 0:
-            # candidates: each swarm's best, and random members for diversity
-            top = np.concatenate((g_idx[:, None], rng.integers(0, p, (s, polish_count - 1))), axis=1)
-            refined = polish_candidates(obj, pbest[rows[:, None], top].reshape(-1, dim),
-                                        max_steps=polish_steps, enough=enough)
-            rev = obj(refined)
-            rf = rev.efficiency.reshape(s, -1)
-            pick = np.argmin(rf, axis=1)
-            new_f = rf[rows, pick]
-            gain = new_f < pbest_f[rows, g_idx]
-            upd = rows[gain]
-            slot = g_idx[gain]
-            chosen = refined.reshape(s, -1, dim)[rows, pick]
-            pbest[upd, slot] = chosen[gain]
-            pbest_f[upd, slot] = new_f[gain]
-            pbest_err[upd, slot] = rev.error.reshape(s, -1)[rows, pick][gain]
-            x[upd, slot] = chosen[gain]
-            swarm_best = pbest_f[rows, g_idx]
-            best = swarm_best.min()
-            best_err = pbest_err[rows, g_idx][np.argmin(swarm_best)]
-            # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement
-            # is judged on the motion time of the candidates that have settled on the goal
-            agree, _ = _agreeing(rev.motion_time, rev.error)
-            stable_rounds = stable_rounds + 1 if last_polished - best < tol else 0
-            last_polished = best
-            reached = best_err <= obj.shaping.eps
-            # an unreached goal gets three times the patience before the run gives up
-            if (stable_rounds >= patience_rounds * (1 if reached else 3)
-                    or (reached and agree >= agreement)):
+        _velocity_update(swarm, rng, _linear(inertia, frac), c1, c2, _linear(c3, frac), vmax)
+        _move(swarm, obj.lower, obj.upper)
+        if eliminated and (it + 1) % elimination_period == 0:
+            _last_elimination(swarm, rng, obj.lower, obj.upper, eliminated)
+        nfev += _evaluate(swarm, obj)
+        if polish and (it + 1) % polish_period == 0:        # ours: see the module docstring
+            refined = _polish_round(swarm, obj, rng, polish_count, polish_steps, enough)
+            # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so
+            # agreement is judged on the motion time of the candidates settled on the goal
+            agree, _ = _agreeing(refined.motion_time, refined.error)
+            stop, reached = stopping.after_round(*swarm.best(), agree)
+            if stop:
                 converged = reached
-                stop = True
                 if reached and agree < curve_search:
-                    # the polish is local: look for faster arcs along the best answer's curve
-                    bs = int(np.argmin(swarm_best))
-                    seeds = curve_minima(obj, pbest[bs, g_idx[bs]])
-                    if len(seeds):
-                        found = polish_candidates(obj, seeds, max_steps=polish_steps)
-                        fev = obj(found)
-                        i = int(np.argmin(fev.efficiency))
-                        if fev.efficiency[i] < best:
-                            pbest[bs, g_idx[bs]] = found[i]
-                            pbest_f[bs, g_idx[bs]] = fev.efficiency[i]
-                            pbest_err[bs, g_idx[bs]] = fev.error[i]
-            elif restart and np.any(swarm_best > best + tol):
-                # swarm-level last-elimination: swarms stuck above the best start afresh
-                lost = rows[swarm_best > best + tol]
-                x[lost] = initial_population(rng, lo, hi, (lost.size, p))
-                v[lost] = 0.0
-                ev = obj(x[lost].reshape(-1, dim))
-                nfev += lost.size * p
-                pbest[lost] = x[lost]
-                pbest_f[lost] = ev.efficiency.reshape(-1, p)
-                pbest_err[lost] = ev.error.reshape(-1, p)
-                f[lost] = pbest_f[lost]
-                g_idx = np.argmin(pbest_f, axis=1)
-
-        flat = int(np.argmin(pbest_f[rows, g_idx]))
-        history.record(float(pbest_f[flat, g_idx[flat]]), float(pbest_err[flat, g_idx[flat]]))
+                    _curve_search(swarm, obj, polish_steps)
+            elif restart:
+                nfev += _restart(swarm, obj, rng, tol)
+        history.record(*swarm.best())
         if not polish and history.stalled():
             converged = stop = True
         if stop:
             break
-
-    flat = int(np.argmin(pbest_f[rows, g_idx]))
-    return history.result(obj, pbest[flat, g_idx[flat]], nfev, converged)
+    s = swarm.best_swarm()
+    return history.result(obj, swarm.pbest[s, swarm.gbest_index[s]], nfev, converged)
