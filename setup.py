@@ -19,7 +19,7 @@ setup(
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
         'ros': ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp'],
         'test': ['pytest', 'colcon-common-extensions'],
-        'bench': ['scipy', 'pyswarms'],
+        'bench': ['scipy', 'pyswarms', 'tqdm'],
         'figures': ['matplotlib'],
     },
     zip_safe=True,

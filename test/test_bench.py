@@ -7,27 +7,36 @@ from __future__ import annotations
 
 import csv
 import importlib.util
-import io
 import logging
+import os
 from pathlib import Path
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.tools.bench.command import (METHODS, PAPER_TABLE5, Case, Progress, Results, draw_cases,
-                                format_failures, paper_case, run, summarise)
-from trajplan_ros.tools.cli import main
 from trajplan_ros.planning.objective import Mode, Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TABLE5
 from trajplan_ros.planning.planner import plan
 from trajplan_ros.planning.reference import exact_minimum
+from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case
+from trajplan_ros.tools.bench.methods import METHODS, pyswarms_logging
+from trajplan_ros.tools.bench.report import format_failures, summarise
+from trajplan_ros.tools.bench.runner import Results, run
+from trajplan_ros.tools.cli import main
 
 ARM = paper_arm()
-SUMMARY_HEADER = ['method', 'goals', 'success_rate', 'median_error_m', 'worst_error_m', 'median_gap',
-                  'median_time_s', 'p99_time_s', 'time_ratio_to_iepso']
+#: Not pytest.importorskip: importing pyswarms here, unguarded, would write ./report.log.
+NEEDS_PYSWARMS = pytest.mark.skipif(importlib.util.find_spec('pyswarms') is None,
+                                    reason='pyswarms is not installed')
+SUMMARY_HEADER = ['method', 'goals', 'success_rate', 'median_error_m', 'worst_error_m',
+                  'median_gap', 'median_time_s', 'p99_time_s', 'time_ratio_to_iepso']
 PLANS_HEADER = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
                 + [f'start_q{i}_rad' for i in range(1, 6)] + [f'q{i}_rad' for i in range(1, 5)]
-                + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s', 'success'])
+                + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
+                   'success'])
 
 
 def _read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
@@ -58,7 +67,8 @@ def test_radial_cases_all_have_a_radial_solution() -> None:
     assert len(cases) == 6
     for case in cases:
         assert np.isfinite(exact_minimum(ARM, case.goal, case.start, mode='radial').motion_time_s)
-        assert case.exact_time == exact_minimum(ARM, case.goal, case.start, mode='radial').motion_time_s
+        exact = exact_minimum(ARM, case.goal, case.start, mode='radial')
+        assert case.exact_time == exact.motion_time_s
 
 
 def test_every_method_is_scored_on_the_same_objective() -> None:
@@ -90,10 +100,12 @@ def test_radial_random_starts_from_the_command_line(capsys: pytest.CaptureFixtur
 def test_same_seed_same_answers() -> None:
     case = draw_cases(ARM, 1, mode=Mode.FREE, random_starts=False, seed=2)[0]
     names = ['iepso', 'scipy-de'] if importlib.util.find_spec('scipy') else ['iepso']
-    first = run([METHODS[n] for n in names], [case], ARM, Mode.FREE)
+    steps: list[int] = []
+    first = run([METHODS[n] for n in names], [case], ARM, Mode.FREE, step=lambda: steps.append(1))
     second = run([METHODS[n] for n in names], [case], ARM, Mode.FREE)
     for n in names:
         assert np.array_equal(first[n].x, second[n].x)
+    assert steps == [1]                                              # one step per case
 
 
 def _results(error: list[float], gap: list[float]) -> Results:
@@ -117,8 +129,10 @@ def test_success_needs_both_the_error_and_the_gap() -> None:
 
 
 def test_failures_are_listed_with_goal_start_seed_error_and_gap() -> None:
-    goals, starts = np.array([[0.1, 0.2, 0.15], [0.2, 0.0, 0.1]]), np.array([np.full(5, 0.25), np.zeros(5)])
-    cases = [Case(g, q, exact_minimum(ARM, g, q), seed) for g, q, seed in zip(goals, starts, (11, 12))]
+    goals = np.array([[0.1, 0.2, 0.15], [0.2, 0.0, 0.1]])
+    starts = np.array([np.full(5, 0.25), np.zeros(5)])
+    cases = [Case(g, q, exact_minimum(ARM, g, q), seed)
+             for g, q, seed in zip(goals, starts, (11, 12))]
     results = {'iepso': _results([0.0, 0.0], [0.0, 0.0]), 'ga': _results([3e-4, 0.0], [0.5, 0.2])}
     text = format_failures(results, cases, limit=-1)
     assert 'iepso' not in text
@@ -139,7 +153,7 @@ def test_bench_quick_writes_the_table_and_csv_files(tmp_path: Path,
     out, err = capsys.readouterr()
     ran = [m.name for m in METHODS.values() if m.available]
     assert 'trajplan bench: 2 goals, free mode' in out and 'time / iepso' in out
-    assert 'bench: 2/2 goals' in err                                  # progress, on stderr
+    assert 'bench: 100%' in err and '2/2' in err                      # progress, on stderr
     for m in METHODS.values():
         assert (f'{m.name}: {m.requires} is not installed, skipped' in out) == (not m.available)
 
@@ -179,10 +193,11 @@ def test_a_missing_peer_is_skipped_with_a_note(monkeypatch: pytest.MonkeyPatch,
     assert '\niepso ' in out and '\npyswarms ' not in out
 
 
-def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(tmp_path: Path,
-                                                               monkeypatch: pytest.MonkeyPatch) -> None:
-    pytest.importorskip('pyswarms')
+@NEEDS_PYSWARMS
+def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv('LOG_CFG', raising=False)
     handlers = list(logging.getLogger().handlers)
     level = logging.getLogger().level
     np.random.seed(123)
@@ -193,7 +208,56 @@ def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(tmp_path: Path,
     assert np.array_equal(a.x, b.x) and a.x.shape == (4,)
     assert list(tmp_path.iterdir()) == []                              # no ./report.log
     assert logging.getLogger().handlers == handlers and logging.getLogger().level == level
+    assert 'LOG_CFG' not in os.environ
     assert np.array_equal(np.random.get_state()[1], state)
+
+
+#: In a fresh interpreter, so that pyswarms' import (which makes Reporters too) is covered: load
+#: and run the pyswarms method, then make a Reporter without the guard, which must misbehave.
+_FRESH_PYSWARMS = """
+import logging, os, sys
+from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.objective import Mode
+from trajplan_ros.tools.bench.cases import paper_case
+from trajplan_ros.tools.bench.methods import load, METHODS
+root = logging.getLogger()
+before = (list(root.handlers), root.level)
+assert 'pyswarms' not in sys.modules
+load([METHODS['pyswarms']])
+case = paper_case(paper_arm(), Mode.FREE, 7)
+METHODS['pyswarms'].solve(paper_arm(), Mode.FREE, case.goal, case.start, case.seed)
+print(before == (list(root.handlers), root.level), os.environ.get('LOG_CFG'), os.listdir())
+from pyswarms.utils import Reporter
+Reporter()
+print(before == (list(root.handlers), root.level), os.listdir())
+"""
+
+
+@NEEDS_PYSWARMS
+def test_pyswarms_import_and_run_write_nothing_in_a_fresh_process(tmp_path: Path) -> None:
+    env = {k: v for k, v in os.environ.items() if k != 'LOG_CFG'}
+    done = subprocess.run([sys.executable, '-c', _FRESH_PYSWARMS], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300, check=True)
+    guarded, unguarded = done.stdout.splitlines()
+    assert guarded == 'True None []'
+    assert unguarded == "False ['report.log']"            # what the guard keeps from happening
+
+
+def test_pyswarms_logging_points_pyswarms_at_a_configuration_of_nothing(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv('LOG_CFG', 'mine.yaml')
+    with pyswarms_logging():
+        config = Path(os.environ['LOG_CFG'])
+        assert config.parent != tmp_path
+        assert config.read_text(encoding='utf-8').split() == ['version:', '1', 'incremental:',
+                                                              'true']
+    assert os.environ['LOG_CFG'] == 'mine.yaml' and not config.exists()
+    monkeypatch.delenv('LOG_CFG')
+    with pyswarms_logging():
+        assert 'LOG_CFG' in os.environ
+    assert 'LOG_CFG' not in os.environ
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_paper_mode_lays_out_table5_and_fig10(tmp_path: Path,
@@ -203,10 +267,10 @@ def test_paper_mode_lays_out_table5_and_fig10(tmp_path: Path,
                  '--csv', str(table), '--quiet']) == 0
     out = capsys.readouterr().out
     assert 'Table 5 as printed' in out
-    for name, (q, f, err) in PAPER_TABLE5.items():
-        line = next(l for l in out.splitlines() if l.startswith(name + ' '))
-        assert f'{q[0]:+.2f}' in line and f'{f:.4g}' in line
-    exact = next(l for l in out.splitlines() if l.startswith('exact optimum'))
+    for name, (q, f, _) in PAPER_TABLE5.items():
+        row = next(line for line in out.splitlines() if line.startswith(name + ' '))
+        assert f'{q[0]:+.2f}' in row and f'{f:.4g}' in row
+    exact = next(line for line in out.splitlines() if line.startswith('exact optimum'))
     assert '4.514' in exact and '-19.49' in exact
     assert 'With and without the reward (Fig. 10)' in out
     assert "Over all 2 run(s) on the paper's target" in out
@@ -215,13 +279,30 @@ def test_paper_mode_lays_out_table5_and_fig10(tmp_path: Path,
     assert [(r['method'], r['goals']) for r in rows] == [('iepso', '2'), ('iepso-noreward', '2')]
 
 
-def test_progress_on_a_pipe_is_a_line_every_tenth() -> None:
-    stream = io.StringIO()
-    progress = Progress(20, stream)
-    for _ in range(20):
-        progress.step()
-    lines = stream.getvalue().splitlines()
-    assert len(lines) == 10 and lines[-1].startswith('bench: 20/20 goals')
+def test_progress_bar_on_stderr_unless_quiet(capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ['bench', '--goals', '2', '--algorithms', 'iepso', '--seed', '1']
+    assert main(argv) == 0
+    shown = capsys.readouterr()
+    assert main([*argv, '--quiet']) == 0
+    quiet = capsys.readouterr()
+    assert quiet.err == ''
+    bar = shown.err.replace('\r', '\n').split()                     # tqdm redraws with \r
+    assert bar[0] == 'bench:' and ' 0/2 ' in shown.err and 'bench: 100%' in shown.err
+    assert '2/2' in shown.err.replace('\r', '\n').splitlines()[-1]
+    assert 'goal' in shown.err
+    assert '%|' not in shown.out                                      # stdout: the report only
+    assert shown.out.splitlines()[:3] == quiet.out.splitlines()[:3]
+
+
+def test_without_tqdm_the_run_goes_on_without_a_bar(monkeypatch: pytest.MonkeyPatch,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, 'find_spec',
+                        lambda name, *a: None if name == 'tqdm' else real(name, *a))
+    assert main(['bench', '--goals', '1', '--algorithms', 'iepso']) == 0
+    out, err = capsys.readouterr()
+    assert 'no progress bar without tqdm (pip install tqdm' in err and '%|' not in err
+    assert '\niepso ' in out
 
 
 @pytest.mark.parametrize('argv', [['bench', '--paper', '--goals', '3'], ['bench', '--runs', '2'],

@@ -1,10 +1,10 @@
 """``trajplan figures`` writes every figure as a valid, non-blank PNG of the promised size."""
 from __future__ import annotations
 
+from pathlib import Path
 import struct
 import sys
 import zlib
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,7 +30,7 @@ def _png_chunks(data: bytes) -> list[tuple[bytes, bytes]]:
 
 
 def check_png(path: Path, width: int, height: int) -> None:
-    """A complete PNG of width x height pixels whose image data inflates to the right size."""
+    """Check for a complete PNG of width x height pixels whose data inflates to that size."""
     chunks = _png_chunks(path.read_bytes())
     assert chunks[0][0] == b'IHDR' and chunks[-1][0] == b'IEND'
     w, h, depth, colour, _, _, interlace = struct.unpack('>IIBBBBB', chunks[0][1])
@@ -42,6 +42,7 @@ def check_png(path: Path, width: int, height: int) -> None:
 
 @pytest.fixture(scope='module')
 def figures(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Write every figure once for this module's tests, into a folder the command creates."""
     pytest.importorskip('matplotlib')
     out = tmp_path_factory.mktemp('figures') / 'new'          # created by the command
     assert main(['figures', str(out), '--runs', '2', '--dpi', '50']) == 0
@@ -73,7 +74,7 @@ def test_cli_lists_the_files(tmp_path: Path, capsys: pytest.CaptureFixture[str])
 
 def test_without_matplotlib_says_how_to_install(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    monkeypatch.setitem(sys.modules, 'matplotlib', None)          # import matplotlib -> ImportError
+    monkeypatch.setitem(sys.modules, 'matplotlib', None)    # import matplotlib -> ImportError
     assert main(['figures', str(tmp_path)]) == 1
     assert 'pip install matplotlib' in capsys.readouterr().err
     assert not any(tmp_path.iterdir())

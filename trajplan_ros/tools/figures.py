@@ -3,7 +3,7 @@ The ``trajplan figures`` subcommand: the paper's figures, redrawn from runs of t
 
 Every figure comes from the paper's experiment (its target from q = 0, Table 4 settings) with
 the seed ``--seed``; IEPSO appears twice, as this package runs it and as published (one swarm,
-no polish, ``bench.METHODS["iepso-paper"]``):
+no polish, ``bench.methods.METHODS['iepso-paper']``):
 
 * fig03_efficiency.png, fig09_efficiency.png: the efficiency scalar F per generation (Fig. 3, 9),
   drawn as F - F* on a log scale, F* = R* - 24 s being F at the exact optimum;
@@ -18,18 +18,20 @@ with ``matplotlib.figure.Figure`` and its Agg canvas, so no display is needed.
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import sys
 from dataclasses import replace
+import importlib.util
 from pathlib import Path
+import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.tools.bench.command import METHODS, paper_case, run
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import PlanResult
+from trajplan_ros.tools.bench.cases import paper_case
+from trajplan_ros.tools.bench.methods import METHODS
+from trajplan_ros.tools.bench.runner import run
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -41,7 +43,8 @@ __all__ = ['make_figures', 'add_parser', 'FIGURES']
 FIGURES: dict[str, tuple[float, float]] = {
     'fig03_efficiency.png': (6.4, 4.4), 'fig04_error.png': (6.4, 4.4),
     'fig05_joint_angles.png': (8.0, 5.6), 'fig07_errors.png': (6.4, 4.8),
-    'fig09_efficiency.png': (6.4, 4.8), 'fig10_reward.png': (9.6, 4.4), 'fig11_arm.png': (6.4, 6.4),
+    'fig09_efficiency.png': (6.4, 4.8), 'fig10_reward.png': (9.6, 4.4),
+    'fig11_arm.png': (6.4, 6.4),
 }
 DEFAULT_SEED = 1
 DEFAULT_RUNS = 5
@@ -84,8 +87,8 @@ def _plot_errors(fig: Figure, plans: dict[str, PlanResult], eps: float, title: s
     ax = fig.add_subplot()
     for name, plan in plans.items():
         colour, style = _STYLE[name]
-        ax.plot(_generations(plan), np.maximum(plan.history_error, _ERROR_FLOOR), color=colour, ls=style,
-                label=f'{_LABELS[name]}: {_outcome(plan)}')
+        ax.plot(_generations(plan), np.maximum(plan.history_error, _ERROR_FLOOR), color=colour,
+                ls=style, label=f'{_LABELS[name]}: {_outcome(plan)}')
     _error_axes(ax, eps)
     ax.set_title(title)
     ax.legend(fontsize='small', loc='best')
@@ -111,7 +114,8 @@ def _plot_joints(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> No
         t = np.linspace(0.0, traj.duration, 400)
         q = traj.sample(t)
         for j, ax in enumerate(axes):
-            ax.plot(t, q[:, j], color=colour, ls=style, label=f'{_LABELS[name]} ({traj.duration:.2f} s)')
+            ax.plot(t, q[:, j], color=colour, ls=style,
+                    label=f'{_LABELS[name]} ({traj.duration:.2f} s)')
     for j, ax in enumerate(axes):
         ax.set_title(f'joint {j + 1} ({arm.joint_names[j]})', fontsize='medium')
         ax.set_ylabel('angle (rad)')
@@ -119,7 +123,8 @@ def _plot_joints(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> No
     for ax in axes[2:]:
         ax.set_xlabel('time (s)')
     axes[0].legend(fontsize='small')
-    fig.suptitle(f"Fig. 5: joint angles against time, every servo at {plans['iepso'].omega:g} rad/s")
+    fig.suptitle('Fig. 5: joint angles against time, every servo at '
+                 f"{plans['iepso'].omega:g} rad/s")
 
 
 def _plot_reward(fig: Figure, runs: dict[str, list[PlanResult]], eps: float) -> None:
@@ -128,8 +133,8 @@ def _plot_reward(fig: Figure, runs: dict[str, list[PlanResult]], eps: float) -> 
         for variant, colour, text in ((name, 'C0', 'with reward'),
                                       (f'{name}-noreward', 'C3', 'without reward')):
             for k, plan in enumerate(runs[variant]):
-                ax.plot(_generations(plan), np.maximum(plan.history_error, _ERROR_FLOOR), color=colour,
-                        lw=1.0, alpha=0.7, label=text if k == 0 else None)
+                ax.plot(_generations(plan), np.maximum(plan.history_error, _ERROR_FLOOR),
+                        color=colour, lw=1.0, alpha=0.7, label=text if k == 0 else None)
         _error_axes(ax, eps)
         ax.set_title(f'{_LABELS[name]}, {len(runs[name])} seeds', fontsize='medium')
     axes[1].set_ylabel('')
@@ -209,10 +214,13 @@ def make_figures(outdir: Path, *, seed: int = DEFAULT_SEED, runs: int = DEFAULT_
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser('figures', help="draw the paper's figures (3, 4, 5, 7, 9, 10, 11) as PNG files",
+    """Add the ``figures`` subcommand to the ``trajplan`` command's subparsers."""
+    p = sub.add_parser('figures',
+                       help="draw the paper's figures (3, 4, 5, 7, 9, 10, 11) as PNG files",
                        description="Plan the paper's experiment and draw its figures as PNG files "
                                    "(needs matplotlib: the package's 'figures' extra).")
-    p.add_argument('outdir', type=Path, help='folder to write the PNG files into (created if missing)')
+    p.add_argument('outdir', type=Path,
+                   help='folder to write the PNG files into (created if missing)')
     p.add_argument('--seed', type=int, default=DEFAULT_SEED,
                    help=f'seed of the runs (default {DEFAULT_SEED})')
     p.add_argument('--runs', type=int, default=DEFAULT_RUNS,
