@@ -231,6 +231,47 @@ def test_bad_goals_publish_nothing_and_the_node_lives_on(planner, peer, trajecto
     assert 'Traceback' not in planner.output
 
 
+def trajplan(*args: str) -> subprocess.CompletedProcess:
+    """Run the ``trajplan`` command in the tests' DDS domain, as a user in a venv would."""
+    return subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', *args],
+                          capture_output=True, text=True, timeout=3 * LIVENESS_S)
+
+
+def test_trajplan_call_plans_through_the_service(planner) -> None:
+    goal = (0.18, 0.05, 0.12)
+    mark = planner.mark()
+    done = trajplan('call', *map(str, goal), '--trajectory')
+    assert done.returncode == 0, done.stdout + done.stderr
+    _, start = started_from(planner, 'service call', goal, mark)
+    expected = plan(goal, start, seed=0)
+    angles = re.search(r'planned joint angles \[rad\]: (.*)', done.stdout).group(1)
+    got = [float(v.split('=')[1]) for v in angles.split()]
+    np.testing.assert_allclose(got, expected.joint_goal, atol=1e-6)     # printed to 6 decimals
+    assert float(re.search(r'position error: (\S+) m', done.stdout).group(1)) <= 1e-6
+    # a goal the node refuses: an empty plan, exit status 1
+    done = trajplan('call', '1.0', '0.0', '0.0')
+    assert done.returncode == 1
+    assert 'empty plan' in done.stdout
+
+
+def test_trajplan_goal_publishes_a_goal_the_node_plans(planner) -> None:
+    goal = (0.12, -0.08, 0.16)
+    mark = planner.mark()
+    done = trajplan('goal', *map(str, goal), '--trajectory')
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert 'published goal (0.12, -0.08, 0.16) m on goal' in done.stdout
+    planner.wait_for(rf'\]: goal #\d+ {fmt(goal)} m from .*; published ', mark)
+    assert re.search(r'JointTrajectory on joint_trajectory: \d+ points', done.stdout)
+
+
+def test_trajplan_call_without_a_node_times_out_with_the_reason() -> None:
+    done = trajplan('call', '0.1', '0.1', '0.1', '--service', '/nobody/plan_trajectory',
+                    '--timeout', '1')
+    assert done.returncode == 1
+    assert 'no service /nobody/plan_trajectory within 1 s' in done.stderr
+    assert 'Traceback' not in done.stderr
+
+
 def test_simultaneous_service_calls_are_all_answered(planner, peer) -> None:
     goals = [(0.15, 0.15, 0.15), (0.2, -0.1, 0.1), (0.1, 0.2, 0.2), (0.25, 0.0, 0.05)]
     futures = [peer.call_async(GetPlan, '/plan_trajectory', plan_request(g)) for g in goals]

@@ -19,6 +19,7 @@ from rclpy.parameter import Parameter
 from test_node import check_servo_trajectory, HOPELESS_GOAL, started_from, trajectory_to
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import ArmModel, paper_arm
+from trajplan_ros.ros.settings import default_values
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 
@@ -155,3 +156,34 @@ def test_bad_parameters_at_startup_end_the_node_with_the_reason(start_node, over
     node.stop()
     assert re.search(reason, node.output), node.output
     assert 'Traceback' not in node.output
+
+
+def parameter_values(peer: RosClient, node: str) -> dict[str, object]:
+    """Return every declared parameter of ``node`` as plain Python values (lists for arrays)."""
+    names = list(default_values())
+    values = peer.get_parameters(node, names)
+    return {n: list(v) if not isinstance(v, (str, int, float)) else v
+            for n, v in zip(names, values)}
+
+
+def test_installed_params_file_starts_the_node_with_its_values(
+        start_node, colcon_install, peer, tmp_path) -> None:
+    installed = colcon_install.prefix / 'share' / 'trajplan_ros' / 'config' / 'params.yaml'
+    node = start_node('-r', '__ns:=/from_file', '--params-file', str(installed))
+    try:
+        assert parameter_values(peer, '/from_file/trajplan') == default_values()
+    finally:
+        assert node.stop() == 0, node.output
+    # the file is read, not ignored: a copy with other values gives the node those values
+    changed = tmp_path / 'params.yaml'
+    changed.write_text(installed.read_text(encoding='utf-8')
+                       .replace('mode: free', 'mode: radial')
+                       .replace('sample_period: 0.1', 'sample_period: 0.25'), encoding='utf-8')
+    node = start_node('-r', '__ns:=/from_copy', '--params-file', str(changed))
+    try:
+        values = parameter_values(peer, '/from_copy/trajplan')
+        assert (values['mode'], values['sample_period']) == ('radial', 0.25)
+        assert {k: v for k, v in values.items() if k not in ('mode', 'sample_period')} == {
+            k: v for k, v in default_values().items() if k not in ('mode', 'sample_period')}
+    finally:
+        assert node.stop() == 0, node.output
