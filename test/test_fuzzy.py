@@ -2,8 +2,7 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.planning.fuzzy import (OUTPUT_LEVELS, RULE_TABLE, RewardPunishment, bell, gaussian,
-                                linear_membership, sigmoid)
+from trajplan_ros.planning.fuzzy import gaussian, OUTPUT_LEVELS, RewardPunishment, RULE_TABLE
 
 S = RewardPunishment()
 ERR_MAX = 0.748
@@ -77,12 +76,9 @@ def test_without_reward_nothing_is_given_below_eps():
     np.testing.assert_array_equal(rp(np.array([0.0, rp.eps]), np.zeros(2), ERR_MAX), [0.0, 0.0])
 
 
-def test_membership_functions_of_table2():
+def test_gaussian_membership_of_table2():
     x = np.array([0.0, 1.0])
     np.testing.assert_allclose(gaussian(x, 0.0, 1.0), [1.0, np.exp(-1)])
-    np.testing.assert_allclose(bell(x, 1.0, 1.0, 0.0), [1.0, 0.5])
-    np.testing.assert_allclose(sigmoid(x, 1.0, 0.0), [0.5, 1 / (1 + np.exp(-1))])
-    np.testing.assert_allclose(linear_membership(x, 0.0, 2.0), [0.0, 0.5])
 
 
 @pytest.mark.parametrize('bad', [dict(eps=-1.0), dict(s=1e-3), dict(err_max=1e-9),

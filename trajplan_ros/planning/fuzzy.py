@@ -35,8 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'gaussian', 'bell', 'sigmoid',
-           'linear_membership']
+__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'gaussian']
 
 #: Output levels of Table 1, as degrees of reward (+) or punishment (-) in [-1, 1].
 OUTPUT_LEVELS: dict[str, float] = {
@@ -64,21 +63,6 @@ _ONES = np.ones(_SINGLETONS.size, dtype=_SINGLE)
 def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
     """Table 2, Gauss: exp(-(x - c)^2 / sigma^2)."""
     return np.exp(-((x - c) ** 2) / sigma ** 2)
-
-
-def bell(x: np.ndarray, a: float, b: float, c: float) -> np.ndarray:
-    """Table 2, Bell: 1 / (1 + |(x - c) / a|^(2 b))."""
-    return 1.0 / (1.0 + np.abs((x - c) / a) ** (2 * b))
-
-
-def sigmoid(x: np.ndarray, a: float, c: float) -> np.ndarray:
-    """Table 2, Sigmoid: 1 / (1 + exp(-a (x - c)))."""
-    return 1.0 / (1.0 + np.exp(-a * (x - c)))
-
-
-def linear_membership(x: np.ndarray, a: float, b: float) -> np.ndarray:
-    """Table 2, linear: (x - a) / (b - a), clipped to [0, 1]."""
-    return np.clip((x - a) / (b - a), 0.0, 1.0)
 
 
 @dataclass(frozen=True)
