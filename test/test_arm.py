@@ -1,10 +1,11 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Arm model: DH forward kinematics, Jacobians and validation (eq. 1-2, Tables 3-4)."""
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
-
-PAPER_TARGET = np.array([0.151171, 0.19162, 0.172124])
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 
 
 def random_arm(rng: np.random.Generator, n: int) -> ArmModel:
@@ -21,7 +22,7 @@ def test_paper_arm_upright_pose_is_the_papers_initial_position():
 
 def test_table5_iepso_row_lands_on_the_papers_target():
     p, _ = paper_arm().tool(np.array([[0.9, 1.49, -0.23, 1.17, 0.0]]))
-    # Table 5 rounds to 0.01 rad; NOTES.md measured 0.8 mm
+    # Table 5 rounds to 0.01 rad, which leaves 0.8 mm (doc/paper.md)
     assert np.linalg.norm(p[0] - PAPER_TARGET) == pytest.approx(0.805e-3, abs=0.01e-3)
 
 
@@ -37,7 +38,7 @@ def test_chain_walk_matches_homogeneous_transforms(n):
 
 
 def arm_and_configurations(n: int, seed: int) -> tuple[np.random.Generator, ArmModel, np.ndarray]:
-    """The paper's arm (n = 5) or a random n-joint arm, and 20 random in-limit configurations."""
+    """Return the paper's arm (n = 5) or a random n-joint arm, and 20 in-limit configurations."""
     rng = np.random.default_rng(seed)
     arm = paper_arm() if n == 5 else random_arm(rng, n)
     return rng, arm, rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
@@ -78,15 +79,16 @@ def test_reach_bounds_every_tool_position():
 
 
 @pytest.mark.parametrize('change, reason', [
-    (dict(a=[0.1, np.nan]), 'non-finite'),
-    (dict(lower=[0.0, 1.0], upper=[1.0, 0.5]), 'lower limit'),
-    (dict(sign=[1, 2]), 'sign'),
-    (dict(joint_names=['j', 'j']), 'distinct'),
-    (dict(planned=1), 'planned'),
-    (dict(d=[0.0]), 'needs 2 values'),
+    ({'a': [0.1, np.nan]}, 'non-finite'),
+    ({'lower': [0.0, 1.0], 'upper': [1.0, 0.5]}, 'lower limit'),
+    ({'sign': [1, 2]}, 'sign'),
+    ({'joint_names': ['j', 'j']}, 'distinct'),
+    ({'joint_names': ['j', '']}, 'distinct'),
+    ({'planned': 1}, 'planned'),
+    ({'d': [0.0]}, 'needs 2 values'),
 ])
 def test_invalid_models_are_refused_with_a_reason(change, reason):
-    spec = dict(a=[0.1, 0.1], alpha=[0, 0], d=[0, 0], lower=[-1, -1], upper=[1, 1])
+    spec = {'a': [0.1, 0.1], 'alpha': [0, 0], 'd': [0, 0], 'lower': [-1, -1], 'upper': [1, 1]}
     spec.update(change)
     with pytest.raises(InvalidArmModel, match=reason):
         ArmModel(**spec)

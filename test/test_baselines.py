@@ -1,12 +1,13 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Comparison algorithms of section VI.B on the same objective and budget."""
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.planning.planner import ALGORITHMS
-
-TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])

@@ -1,13 +1,15 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Objective F = R + S (eq. 9-14): values, modes and refused requests."""
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.objective import InvalidRequest, Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
-TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 
 def test_motion_time_is_eq10():
@@ -49,7 +51,8 @@ def test_vectorised_over_particles():
 ])
 def test_bad_requests_are_refused_before_optimisation(goal, start, reason):
     with pytest.raises(InvalidRequest, match=reason):
-        Objective(ARM, np.asarray(goal, dtype=float), np.zeros(5) if start is None else np.asarray(start, dtype=float))
+        Objective(ARM, np.asarray(goal, dtype=float),
+                  np.zeros(5) if start is None else np.asarray(start, dtype=float))
 
 
 def test_bad_settings_raise():

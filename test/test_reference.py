@@ -1,18 +1,20 @@
-"""The exact reference (tests and benchmarks only) against the paper and NOTES.md."""
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""The exact reference (tests and benchmarks only) against the paper and doc/paper.md."""
 import numpy as np
 import pytest
 
-from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.planning.polish import polish
 from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
-TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 
 @pytest.mark.parametrize('mode, minimum', [('free', 4.514270), ('radial', 6.691749)])
-def test_paper_target_minimum_matches_notes(mode, minimum):
+def test_paper_target_minimum_matches_doc(mode, minimum):
     ref = exact_minimum(ARM, TARGET, np.zeros(5), mode=mode)
     assert ref.motion_time_s == pytest.approx(minimum, abs=1e-6)
     p, u = ARM.tool(np.r_[ref.joint_goal, 0.0][None, :])
@@ -39,7 +41,7 @@ def test_no_local_search_beats_the_reference():
 
 def test_other_arm_shapes_are_refused():
     arm = paper_arm()
-    from trajplan_ros.kinematics import ArmModel
-    other = ArmModel(a=arm.a, alpha=np.zeros(5), d=arm.d, lower=arm.lower, upper=arm.upper, planned=4)
+    other = ArmModel(a=arm.a, alpha=np.zeros(5), d=arm.d, lower=arm.lower, upper=arm.upper,
+                     planned=4)
     with pytest.raises(ValueError, match='shaped like'):
         exact_minimum(other, TARGET, np.zeros(5))

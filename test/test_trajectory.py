@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """The servo trajectory: fixed angular velocity, controller-ready timing."""
 import numpy as np
 import pytest
@@ -31,9 +33,9 @@ def test_every_joint_turns_at_omega_until_it_arrives():
 
 def test_sample_interpolates_from_the_start():
     traj = servo_trajectory(START, GOAL, OMEGA)
+    after_one_second = START + np.sign(GOAL - START) * np.minimum(OMEGA, np.abs(GOAL - START))
     np.testing.assert_allclose(traj.sample(np.array([0.0, 1.0, 100.0])),
-                               [START, START + np.sign(GOAL - START) * np.minimum(OMEGA, np.abs(GOAL - START)), GOAL],
-                               atol=1e-12)
+                               [START, after_one_second, GOAL], atol=1e-12)
 
 
 def test_no_motion_gives_one_resting_point():

@@ -1,24 +1,25 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """The URDF puts every frame where the DH model does, with the model's joint values and limits."""
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from pathlib import Path
+import xml.etree.ElementTree as ET
 
+from conftest import Install
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.tools.cli import main
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
-
-from conftest import Install
+from trajplan_ros.tools.cli import main
 
 RESOURCE = Path(__file__).resolve().parents[1] / 'resource' / 'paper_arm.urdf'
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rodrigues' formula (written here, independently of the module under test)."""
+    """Return the rotation by Rodrigues' formula (written here, independently of the module)."""
     k = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     skew = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + np.sin(angle) * skew + (1 - np.cos(angle)) * skew @ skew
@@ -36,7 +37,7 @@ def _origin(joint: ET.Element) -> np.ndarray:
 
 
 def _chain(root: ET.Element) -> list[ET.Element]:
-    """The joints from base_link to tool_link, in order, following parent/child links."""
+    """Return the joints from base_link to tool_link, in order, following parent/child links."""
     by_parent = {j.find('parent').get('link'): j for j in root.iter('joint')}
     joints, link = [], 'base_link'
     while link != 'tool_link':
@@ -47,13 +48,14 @@ def _chain(root: ET.Element) -> list[ET.Element]:
 
 
 def _urdf_frames(root: ET.Element, q: np.ndarray) -> list[np.ndarray]:
-    """World transform of every child link along the chain for joint values q."""
+    """Return the world transform of every child link along the chain for joint values q."""
     out, t, k = [], np.eye(4), 0
     for joint in _chain(root):
         t = t @ _origin(joint)
         if joint.get('type') == 'revolute':
             turn = np.eye(4)
-            turn[:3, :3] = _rotation(np.array(joint.find('axis').get('xyz').split(), dtype=float), q[k])
+            axis = np.array(joint.find('axis').get('xyz').split(), dtype=float)
+            turn[:3, :3] = _rotation(axis, q[k])
             t = t @ turn
             k += 1
         out.append(t)
@@ -107,7 +109,7 @@ def test_installed_resource_is_current() -> None:
 
 
 def test_urdf_is_installed_with_the_package(colcon_install: Install) -> None:
-    """setup.py installs resource/*.urdf to share/trajplan_ros/urdf/ (colcon build, conftest.py)."""
+    """Check setup.py installs resource/*.urdf to share/trajplan_ros/urdf/ (colcon build)."""
     installed = colcon_install.prefix / 'share' / 'trajplan_ros' / 'urdf' / 'paper_arm.urdf'
     assert installed.read_text(encoding='utf-8') == RESOURCE.read_text(encoding='utf-8')
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 trajplan_ros: direct trajectory planning with IEPSO and fuzzy rewards and punishment.
 
@@ -13,8 +15,8 @@ The names below are the public library API.
 """
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_TOLERANCE, InvalidRequest, Mode,
-                                   Objective, PlanResult, PlanStatus, RewardPunishment,
-                                   Trajectory, plan, servo_trajectory)
+                                   Objective, plan, PlanResult, PlanStatus, RewardPunishment,
+                                   servo_trajectory, Trajectory)
 
 __all__ = [
     'ALGORITHMS', 'ArmModel', 'DEFAULT_TOLERANCE', 'InvalidArmModel', 'InvalidRequest', 'Mode',

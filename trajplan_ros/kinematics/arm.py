@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Serial revolute arm described by Denavit-Hartenberg parameters (Lv et al. 2019, eq. 1-2).
 
@@ -34,12 +36,14 @@ def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class ToolJacobian:
     """
-    Tool position p and axis u with, per planned joint i, the derivatives
-    dp/dq_i = Z_i x (p - o_i) and du/dq_i = Z_i x u and the signed joint axis Z_i (axis of
-    joint i times its sign), all in the base frame.
+    Tool position p and axis u, their first derivatives and the joint axes, in the base frame.
+
+    Per planned joint i: dp/dq_i = Z_i x (p - o_i), du/dq_i = Z_i x u and the signed joint axis
+    Z_i (axis of joint i times its sign).
 
     ``tool`` is (3, 2, N): x, y, z of p and u. ``columns`` is (3, planned, 3, N): x, y, z of
-    [i, 0] = dp/dq_i, [i, 1] = du/dq_i and [i, 2] = Z_i (coordinates first, for fast arithmetic).
+    [i, 0] = dp/dq_i, [i, 1] = du/dq_i and [i, 2] = Z_i (coordinates first, for fast
+    arithmetic).
     """
 
     tool: np.ndarray
@@ -67,23 +71,25 @@ class ToolJacobian:
 
     def curvature(self, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """
-        Second derivatives of p and u along joint directions n (N, planned): d2/dt2 at t = 0
-        of p(q + t n) and u(q + t n), each (N, 3).
+        Return the second derivatives of p and u along joint directions n (N, planned).
+
+        They are d2/dt2 at t = 0 of p(q + t n) and u(q + t n), each (N, 3).
 
         The derivative of column i with respect to q_j, for j <= i (j nearer the base), is
         Z_j x J_i, so the sum over all pairs is sum_j n_j Z_j x (2 T_j - n_j J_j) with
         T_j = sum_{i >= j} n_i J_i.
         """
-        weight = n.T[:, None, :]                                        # (planned, 1, N)
-        turned = self.columns[:, :, 2:] * weight                        # n_j Z_j, (3, planned, 1, N)
-        # regrouped by column i: sum_i n_i (2 W_i - n_i Z_i) x J_i with W_i = sum_{j <= i} n_j Z_j
+        weight = n.T[:, None, :]                                 # (planned, 1, N)
+        turned = self.columns[:, :, 2:] * weight                 # n_j Z_j, (3, planned, 1, N)
+        # regrouped by column i: sum_i n_i (2 W_i - n_i Z_i) x J_i
+        # with W_i = sum_{j <= i} n_j Z_j
         a = 2.0 * turned
-        for i in range(1, a.shape[1]):                                  # running sum: W_i
+        for i in range(1, a.shape[1]):                           # running sum: W_i
             a[:, i] += a[:, i - 1]
         a -= turned
         jac = self.columns[:, :, :2]
-        cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]          # coordinates first
-        second = np.einsum('cikn,in->ckn', cross, n.T)                 # (3, 2, N)
+        cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]    # coordinates first
+        second = np.einsum('cikn,in->ckn', cross, n.T)           # (3, 2, N)
         return second[:, 0].T, second[:, 1].T
 
 
@@ -103,7 +109,8 @@ class ArmModel:
         sign, offset: theta_i = sign_i * q_i + offset_i (sign is +1 or -1).
         lower, upper: joint limits on q (rad).
         joint_names: names used in JointState / JointTrajectory messages.
-        planned: how many leading joints the planner moves (2..7); the others keep their start angle.
+        planned: how many leading joints the planner moves (2..7); the others keep their start
+            angle.
     """
 
     a: np.ndarray
@@ -142,18 +149,22 @@ class ArmModel:
                 f'joint {i + 1}: lower limit {self.lower[i]} is above upper limit {self.upper[i]}')
         names = tuple(joint_names) if joint_names is not None else tuple(
             f'joint{i + 1}' for i in range(n))
-        if len(names) != n or len(set(names)) != n or not all(isinstance(s, str) and s for s in names):
-            raise InvalidArmModel(f'joint_names must be {n} distinct non-empty names, got {list(names)}')
+        distinct = len(names) == n and len(set(names)) == n
+        if not distinct or not all(isinstance(s, str) and s for s in names):
+            raise InvalidArmModel(
+                f'joint_names must be {n} distinct non-empty names, got {list(names)}')
         put(self, 'joint_names', names)
         planned = n if planned is None else int(planned)
         if not 2 <= planned <= min(n, 7):
-            raise InvalidArmModel(f'planned joints must be between 2 and {min(n, 7)}, got {planned}')
+            raise InvalidArmModel(
+                f'planned joints must be between 2 and {min(n, 7)}, got {planned}')
         put(self, 'planned', planned)
         put(self, '_cos_alpha', np.cos(self.alpha))
         put(self, '_sin_alpha', np.sin(self.alpha))
 
     @property
     def n_joints(self) -> int:
+        """Return the number of joints in the chain."""
         return self.a.size
 
     @property
@@ -167,13 +178,13 @@ class ArmModel:
         return float(np.sum(np.hypot(self.a, self.d)))
 
     def within_limits(self, q: np.ndarray, tol: float = 1e-12) -> np.ndarray:
-        """True where every joint of q (..., n_joints) lies inside its limits."""
+        """Return True where every joint of q (..., n_joints) lies inside its limits."""
         q = np.asarray(q, dtype=float)
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
 
     def held_tail(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """
-        The tool point and axis in frame ``planned`` with the held joints at q (n_joints,).
+        Return the tool point and axis in frame ``planned``, the held joints at q (n_joints,).
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
@@ -184,7 +195,7 @@ class ArmModel:
     def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
              ) -> tuple[np.ndarray, np.ndarray]:
         """
-        Tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
+        Return tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
 
         With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
         """
@@ -195,7 +206,7 @@ class ArmModel:
     def tool_jacobian(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
                       ) -> ToolJacobian:
         """
-        Tool position and axis, their first derivatives and the joint axes; see ``ToolJacobian``.
+        Return tool position and axis, their derivatives and the joint axes (``ToolJacobian``).
 
         ``tail`` as for ``tool``.
         """
@@ -212,7 +223,9 @@ class ArmModel:
     def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],
                jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
         """
-        Walk joints top-1 .. bottom from frame ``top`` towards the base (every optimiser's hot path).
+        Walk joints top-1 .. bottom from frame ``top`` towards the base.
+
+        This is every optimiser's hot path.
 
         ``tail`` is the tool point and axis in frame ``top`` as (w, z) with w = x + i y
         (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool
@@ -226,7 +239,7 @@ class ArmModel:
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
         theta = (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top]).T
-        rot = np.empty(theta.shape, dtype=complex)       # e^(i theta): cos and sin beat complex exp
+        rot = np.empty(theta.shape, dtype=complex)    # e^(i theta): cos, sin beat complex exp
         np.cos(theta, out=rot.real)
         np.sin(theta, out=rot.imag)
         rows = 2 + 3 * self.planned if jacobian else 2
@@ -249,7 +262,7 @@ class ArmModel:
         return w, z
 
     def frames(self, q: np.ndarray) -> np.ndarray:
-        """Homogeneous transforms of every frame, shape (N, n_joints + 1, 4, 4); index 0 is the base."""
+        """Return every frame's homogeneous transform, (N, n_joints + 1, 4, 4); 0 is the base."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         theta = q * self.sign + self.offset
         ct, st = np.cos(theta), np.sin(theta)

@@ -1,9 +1,11 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Direct trajectory planning: objective, fuzzy shaping, optimisers, trajectory and ``plan``."""
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
-from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, PlanResult,
-                                           PlanStatus, plan)
-from trajplan_ros.planning.trajectory import Trajectory, servo_trajectory
+from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, plan, PlanResult,
+                                           PlanStatus)
+from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
 
 __all__ = [
     'ALGORITHMS', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'Mode', 'Objective', 'PlanResult',

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The comparison algorithms of section VI.B: PSO, SPSO, GA and DE on the same objective.
 
@@ -20,7 +22,7 @@ from typing import Callable
 import numpy as np
 
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.optimize import History, OptimizeResult, initial_population
+from trajplan_ros.planning.optimize import History, initial_population, OptimizeResult
 
 __all__ = ['pso', 'spso', 'ga', 'de']
 
@@ -41,6 +43,7 @@ class _Run:
         self.best_x, self.best_f, self.best_err = None, np.inf, np.inf
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
+        """Return F for the rows of x, counting them and keeping the best one seen."""
         ev = self.obj(x)
         self.nfev += x.shape[0]
         i = int(np.argmin(ev.efficiency))
@@ -49,14 +52,17 @@ class _Run:
         return ev.efficiency
 
     def step_done(self) -> bool:
+        """Record the iteration's best; return True when the stopping rule fires."""
         self.history.record(float(self.best_f), float(self.best_err))
         return self.history.stalled()
 
     def result(self, converged: bool) -> OptimizeResult:
+        """Return the best answer as an ``OptimizeResult``."""
         return self.history.result(self.obj, self.best_x, self.nfev, converged)
 
 
-def _swarm(obj: Objective, population: int, max_iter: int, tol: float, seed, *, constricted: bool) -> OptimizeResult:
+def _swarm(obj: Objective, population: int, max_iter: int, tol: float,
+           seed: int | np.random.Generator | None, *, constricted: bool) -> OptimizeResult:
     run = _Run(obj, population, max_iter, tol, seed)
     lo, hi = run.lo, run.hi
     vmax = 0.2 * (hi - lo)
@@ -89,19 +95,23 @@ def _swarm(obj: Objective, population: int, max_iter: int, tol: float, seed, *, 
 
 def pso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
         seed: int | np.random.Generator | None = None) -> OptimizeResult:
-    """Standard inertia-weight PSO with a global best."""
+    """Run the standard inertia-weight PSO with a global best."""
     return _swarm(obj, population, max_iter, tol, seed, constricted=False)
 
 
 def spso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
          seed: int | np.random.Generator | None = None) -> OptimizeResult:
-    """Standard PSO 2007: constriction coefficients and a ring topology."""
+    """Run Standard PSO 2007: constriction coefficients and a ring topology."""
     return _swarm(obj, population, max_iter, tol, seed, constricted=True)
 
 
-def _generations(obj: Objective, population: int, max_iter: int, tol: float, seed,
-                 generation: Callable[[_Run, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
-                 ) -> OptimizeResult:
+#: One generation of a population method: (run, x, f) -> (x, f).
+_Generation = Callable[[_Run, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def _generations(obj: Objective, population: int, max_iter: int, tol: float,
+                 seed: int | np.random.Generator | None,
+                 generation: _Generation) -> OptimizeResult:
     """Run ``generation(run, x, f) -> (x, f)`` until the stopping rule or the iteration cap."""
     run = _Run(obj, population, max_iter, tol, seed)
     x = initial_population(run.rng, run.lo, run.hi, (population,))
@@ -146,11 +156,11 @@ def _de_generation(run: _Run, x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray,
 
 def ga(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
        seed: int | np.random.Generator | None = None) -> OptimizeResult:
-    """Real-coded genetic algorithm with tournament selection, BLX-0.5 and Gaussian mutation."""
+    """Run a real-coded GA with tournament selection, BLX-0.5 and Gaussian mutation."""
     return _generations(obj, population, max_iter, tol, seed, _ga_generation)
 
 
 def de(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
        seed: int | np.random.Generator | None = None) -> OptimizeResult:
-    """Differential evolution, DE/rand/1/bin with F = 0.5 and CR = 0.9."""
+    """Run differential evolution, DE/rand/1/bin with F = 0.5 and CR = 0.9."""
     return _generations(obj, population, max_iter, tol, seed, _de_generation)

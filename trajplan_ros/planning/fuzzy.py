@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Fuzzy rewards and punishment (Lv et al. 2019, section IV and VI.A), in SI units.
 
@@ -11,7 +13,7 @@ Where the paper is silent or ill-posed, these are our choices (also listed in th
   distance between a tool position and a goal inside the reach sphere.
 * Eq. (15) is linear in err on the punishment side. With err_max reach-sized, lambda and so the
   punishment alpha (eq. 16) barely change between 2 mm and eps, and a swarm stalls millimetres
-  from the goal (NOTES.md). By default lambda is therefore log-scaled on that side,
+  from the goal (doc/paper.md). By default lambda is therefore log-scaled on that side,
   lambda = -ln(err/eps) / ln(err_max/eps): the same end points (0 at eps, -1 at err_max) and the
   same monotonic meaning, but alpha keeps a slope at every scale. ``lambda_scale="linear"`` is
   the literal eq. (15).
@@ -52,7 +54,8 @@ RULE_TABLE: dict[str, tuple[str, ...]] = {
 #: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the L, M, H sets on tau.
 #: The rule base is evaluated in single precision (see ``RewardPunishment.rule_degree``).
 _SINGLE = np.float32
-_CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]).astype(_SINGLE)
+_CLOSENESS_CENTRES = np.array(
+    [-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]).astype(_SINGLE)
 _TIME_CENTRES = {'L': 0.0, 'M': 0.5, 'H': 1.0}
 _SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]]
                         for row in ('H', 'M', 'L')]).astype(_SINGLE)
@@ -61,34 +64,31 @@ _ONES = np.ones(_SINGLETONS.size, dtype=_SINGLE)
 
 
 def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
-    """Table 2, Gauss: exp(-(x - c)^2 / sigma^2)."""
+    """Return the Gaussian membership of Table 2, exp(-(x - c)^2 / sigma^2)."""
     return np.exp(-((x - c) ** 2) / sigma ** 2)
 
 
 @dataclass(frozen=True)
 class RewardPunishment:
-    """
-    The S term of eq. (9) with Table 4's defaults in metres.
+    """The S term of eq. (9) with Table 4's defaults in metres."""
 
-    Attributes:
-        eps: reward and punishment waken threshold (m); errors above it are punished.
-        s: reward waken threshold (m) between the two reward pieces of eq. (17).
-        k, j: punishment and reward gains (eq. 16, 17).
-        err_max: error at which lambda reaches -1 (m); None means twice the arm's reach.
-        lambda_scale: "log" (default, see module docstring) or "linear" (literal eq. 15).
-        fuzzy_rules: apply the Table 1 rule base to the punishment.
-        reward: apply the reward (eq. 17); False gives the "no reward" curve of Fig. 10.
-        sigma: width of the Gaussian membership functions.
-    """
-
+    #: Reward and punishment waken threshold (m); errors above it are punished.
     eps: float = 5e-6
+    #: Reward waken threshold (m) between the two reward pieces of eq. (17).
     s: float = 5e-10
+    #: Punishment gain (eq. 16).
     k: float = 10000.0
+    #: Reward gain (eq. 17).
     j: float = 3.0
+    #: Error at which lambda reaches -1 (m); None means twice the arm's reach.
     err_max: float | None = None
+    #: "log" (default, see the module docstring) or "linear" (the literal eq. 15).
     lambda_scale: str = 'log'
+    #: Apply the Table 1 rule base to the punishment.
     fuzzy_rules: bool = True
+    #: Apply the reward (eq. 17); False gives the "no reward" curve of Fig. 10.
     reward: bool = True
+    #: Width of the Gaussian membership functions.
     sigma: float = 0.15
 
     def __post_init__(self) -> None:
@@ -97,13 +97,14 @@ class RewardPunishment:
             raise ValueError('eps, s, k, j and sigma must be finite and positive')
         if not self.s < self.eps:
             raise ValueError(f's ({self.s}) must be below eps ({self.eps})')
-        if self.err_max is not None and not (np.isfinite(self.err_max) and self.err_max > self.eps):
+        usable = self.err_max is None or (np.isfinite(self.err_max) and self.err_max > self.eps)
+        if not usable:
             raise ValueError(f'err_max must be finite and above eps, got {self.err_max}')
         if self.lambda_scale not in ('log', 'linear'):
             raise ValueError(f"lambda_scale must be 'log' or 'linear', got {self.lambda_scale!r}")
 
     def closeness(self, err: np.ndarray, err_max: float) -> np.ndarray:
-        """Eq. (15): the degree lambda in [-1, 1] to which the error approaches zero."""
+        """Return lambda of eq. (15), the degree in [-1, 1] to which the error approaches zero."""
         err = np.asarray(err, dtype=float)
         reward_side = 1.0 - err / self.eps
         if self.lambda_scale == 'linear':
@@ -115,7 +116,7 @@ class RewardPunishment:
 
     def rule_degree(self, lam: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """
-        Table 1 inference: degree lambda_R in [-1, 1] from closeness lambda and time tau.
+        Return the Table 1 inference: degree lambda_R in [-1, 1] from closeness and time tau.
 
         Rule strength is min(mu_row(tau), mu_col(lambda)) (eq. 6); the degree is the
         strength-weighted mean of the rules' output levels. The memberships are computed in
@@ -132,11 +133,15 @@ class RewardPunishment:
         return degree.astype(float).reshape(lam.shape)
 
     def punishment(self, lam: np.ndarray) -> np.ndarray:
-        """Eq. (16): alpha = k exp(-5 (lambda + 1)^2)."""
+        """Return the punishment alpha of eq. (16), k exp(-5 (lambda + 1)^2)."""
         return self.k * np.exp(-5.0 * (lam + 1.0) ** 2)
 
     def reward_value(self, err: np.ndarray) -> np.ndarray:
-        """Eq. (17): beta1 from 0 (err = eps) to -12 (err = s), beta2 from -12 to -24 (err = 0)."""
+        """
+        Return the reward of eq. (17): beta1 above s, beta2 at or below it.
+
+        beta1 runs from 0 (err = eps) to -12 (err = s), beta2 from -12 to -24 (err = 0).
+        """
         err = np.asarray(err, dtype=float)
         # The paper's 0.02 / (eps - s) is 4 eps / (eps - s) with eps = 0.005 mm; written in eps
         # it holds in any unit: beta1 = -j (-4 err + 4 eps) / (eps - s).
@@ -145,7 +150,7 @@ class RewardPunishment:
         return np.where(err <= self.s, beta2, beta1)
 
     def __call__(self, err: np.ndarray, tau: np.ndarray, err_max: float) -> np.ndarray:
-        """S(err) of eq. (9): punishment above eps, reward at or below it."""
+        """Return S(err) of eq. (9): punishment above eps, reward at or below it."""
         err = np.asarray(err, dtype=float)
         lam = self.closeness(err, err_max)
         if self.fuzzy_rules:

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and start.
 
@@ -14,9 +16,9 @@ dimensionless axis residual into metres.
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from enum import Enum
+import functools
 
 import numpy as np
 
@@ -68,24 +70,28 @@ class Objective:
         self.upper = arm.upper[:m].copy()
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
         self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
-        self.axis_target = float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial else 0.0
+        self.axis_target = (float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial
+                            else 0.0)
         self._tail = arm.held_tail(self.start)
 
     @property
     def radial(self) -> bool:
+        """Return True in radial mode (the eq. 12-13 orientation constraint applies)."""
         return self.mode is Mode.RADIAL
 
     @staticmethod
     def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:
         g = np.asarray(goal, dtype=float)
         if g.shape != (3,):
-            raise InvalidRequest(f'goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}')
+            raise InvalidRequest(
+                f'goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}')
         if not np.all(np.isfinite(g)):
             raise InvalidRequest(f'goal has a non-finite coordinate: {g.tolist()}')
         dist = float(np.linalg.norm(g))
         if dist > arm.reach:
             raise InvalidRequest(
-                f"goal is {dist:.4f} m from the base, beyond the arm's reach of {arm.reach:.4f} m (eq. 14)")
+                f'goal is {dist:.4f} m from the base, '
+                f"beyond the arm's reach of {arm.reach:.4f} m (eq. 14)")
         return g
 
     @staticmethod
@@ -104,40 +110,40 @@ class Objective:
         return np.clip(q, arm.lower, arm.upper)
 
     def full(self, x: np.ndarray) -> np.ndarray:
-        """Joint vectors (N, n_joints): the planned joints from x (N, planned), the rest held."""
+        """Return full joint vectors (N, n_joints): x (N, planned), then the held joints."""
         x = np.atleast_2d(x)
         q = np.broadcast_to(self.start, (x.shape[0], self.arm.n_joints)).copy()
         q[:, : self.arm.planned] = x
         return q
 
     def tool(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tool position and axis (N, 3) for planned-joint vectors x (N, planned), the rest held."""
+        """Return tool position and axis (N, 3) for planned-joint vectors x (N, planned)."""
         return self.arm.tool(x, tail=self._tail)
 
     def tool_jacobian(self, x: np.ndarray) -> ToolJacobian:
-        """``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned), the rest held."""
+        """Return ``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned)."""
         return self.arm.tool_jacobian(x, tail=self._tail)
 
     def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Constraint residuals (N, 3) or (N, 4): p - goal, and u_z - cos eps in radial mode."""
+        """Return the residuals p - goal, and u_z - cos eps in radial mode, (N, 3) or (N, 4)."""
         r = p - self.goal
         if self.radial:
             r = np.concatenate((r, (u[:, 2:3] - self.axis_target)), axis=1)
         return r
 
     def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Eq. (11), extended by the axis residual in radial mode (see module docstring)."""
+        """Return the error of eq. (11), plus the axis residual in radial mode (see the module)."""
         return self.residual_norm(self.residuals(p, u))
 
     def residual_norm(self, r: np.ndarray) -> np.ndarray:
-        """The error (m) of residuals r (N, 3 or 4): the axis residual is scaled by the reach."""
+        """Return the error (m) of residuals r (N, 3 or 4), the axis one scaled by the reach."""
         sq = np.einsum('ij,ij->i', r[:, :3], r[:, :3])
         if self.radial:
             sq = sq + (self.arm.reach * r[:, 3]) ** 2
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
-        """Eq. (10): R = max_i |x_i - start_i| / omega, for x (N, planned)."""
+        """Return R of eq. (10), max_i |x_i - start_i| / omega, for x (N, planned)."""
         moved = np.abs(x - self.start[: self.arm.planned])
         # a fold over the few joints is several times faster than np.max(..., axis=1)
         return functools.reduce(np.maximum, moved.T) / self.omega

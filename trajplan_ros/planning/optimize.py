@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """What every optimiser returns, and the bookkeeping they share (history, stopping rule)."""
 from __future__ import annotations
 
@@ -12,28 +14,25 @@ __all__ = ['OptimizeResult', 'History', 'initial_population']
 
 @dataclass
 class OptimizeResult:
-    """
-    Best joint goal found by an optimiser (planned joints only), scipy.optimize style.
+    """Best joint goal found by an optimiser (planned joints only), scipy.optimize style."""
 
-    Attributes:
-        x: best planned-joint vector (rad).
-        fun: its efficiency scalar F (eq. 9).
-        motion_time: its R (eq. 10), s.
-        error: its constraint error (eq. 11), m.
-        nit: iterations (generations) run.
-        nfev: objective evaluations used (polish steps not included).
-        converged: True when the stopping rule fired before the iteration cap.
-        history_fun, history_error: best F and its error after every iteration.
-    """
-
+    #: Best planned-joint vector (rad).
     x: np.ndarray
+    #: Its efficiency scalar F (eq. 9).
     fun: float
+    #: Its R (eq. 10), s.
     motion_time: float
+    #: Its constraint error (eq. 11), m.
     error: float
+    #: Iterations (generations) run.
     nit: int
+    #: Objective evaluations used (polish steps not included).
     nfev: int
+    #: True when the stopping rule fired before the iteration cap.
     converged: bool
+    #: Best F after every iteration.
     history_fun: np.ndarray = field(repr=False)
+    #: The error of that best F after every iteration.
     history_error: np.ndarray = field(repr=False)
 
 
@@ -53,16 +52,20 @@ class History:
         self.tol, self.patience, self.eps = tol, patience, eps
 
     def record(self, fun: float, error: float) -> None:
+        """Append one iteration's best F and its error."""
         self.fun[self.n] = fun
         self.error[self.n] = error
         self.n += 1
 
     def stalled(self) -> bool:
+        """Return True when the stopping rule fires (see the class docstring)."""
         if self.n <= self.patience or self.error[self.n - 1] > self.eps:
             return False
         return self.fun[self.n - 1 - self.patience] - self.fun[self.n - 1] < self.tol
 
-    def result(self, obj: Objective, x: np.ndarray, nfev: int, converged: bool) -> OptimizeResult:
+    def result(self, obj: Objective, x: np.ndarray, nfev: int,
+               converged: bool) -> OptimizeResult:
+        """Return the ``OptimizeResult`` for the answer x (planned,), evaluated once more."""
         ev = obj(x[None, :])
         return OptimizeResult(
             x=x.copy(), fun=float(ev.efficiency[0]), motion_time=float(ev.motion_time[0]),
@@ -72,5 +75,5 @@ class History:
 
 def initial_population(rng: np.random.Generator, lower: np.ndarray, upper: np.ndarray,
                        shape: tuple[int, ...]) -> np.ndarray:
-    """Uniform random joint vectors inside the limits, shape ``shape + (dim,)``."""
+    """Return uniform random joint vectors inside the limits, shape ``shape + (dim,)``."""
     return lower + (upper - lower) * rng.random(shape + lower.shape)

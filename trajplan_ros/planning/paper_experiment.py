@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """The paper's experiment (Lv et al. 2019, section VI.B): its target and Table 5 as printed."""
 from __future__ import annotations
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Direct trajectory planning (Lv et al. 2019): search the final joint angles, then move there.
 
@@ -10,9 +12,9 @@ Direct trajectory planning (Lv et al. 2019): search the final joint angles, then
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from enum import Enum
+import time
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -23,7 +25,7 @@ from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.planning.optimize import OptimizeResult
-from trajplan_ros.planning.trajectory import Trajectory, servo_trajectory
+from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
 
 __all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_TOLERANCE']
 
@@ -67,19 +69,21 @@ class PlanResult:
 
     @property
     def success(self) -> bool:
+        """Return True when the goal was reached within the tolerance."""
         return self.status is PlanStatus.SUCCEEDED
 
     def trajectory(self, arm: ArmModel, sample_period: float = 0.1) -> Trajectory:
-        """The fixed-angular-velocity joint trajectory from the start to the joint goal."""
+        """Return the fixed-angular-velocity joint trajectory from the start to the joint goal."""
         if self.joint_goal is None or self.start is None:
             raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
         return servo_trajectory(self.start, self.joint_goal, self.omega,
                                 sample_period=sample_period, joint_names=arm.joint_names)
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready summary (the ``trajplan plan --json`` line)."""
+        """Return a JSON-ready summary (the ``trajplan plan --json`` line); NaN becomes None."""
         def num(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
+
         return {
             'goal': [num(v) for v in self.goal],
             'success': self.success,
@@ -107,21 +111,23 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     """
     Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
 
-    Args:
-        goal: tool position (x, y, z) in metres.
-        start: all joint angles now (rad); default the upright pose q = 0.
-        arm: the arm model; default ``paper_arm()``.
-        mode: "free" (position only) or "radial" (eq. 12-13 orientation constraint too).
-        algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga", "de".
-        omega: servo angular velocity (rad/s) of eq. (10).
-        tolerance: largest error (m) that counts as reached.
-        seed: random seed; the same seed gives the same answer, bit for bit.
-        population, max_iter, tol: swarm size, iteration cap and convergence precision.
-        shaping: the rewards-and-punishment settings (Table 4 defaults).
-        options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
-
     Invalid goals and starts give a REJECTED result with the reason, never an exception;
     invalid settings (unknown mode or algorithm, non-positive numbers) raise ValueError.
+
+    :param goal: tool position (x, y, z) in metres.
+    :param start: all joint angles now (rad); default the upright pose q = 0.
+    :param arm: the arm model; default ``paper_arm()``.
+    :param mode: "free" (position only) or "radial" (eq. 12-13 orientation constraint too).
+    :param algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga",
+        "de".
+    :param omega: servo angular velocity (rad/s) of eq. (10).
+    :param tolerance: largest error (m) that counts as reached.
+    :param seed: random seed; the same seed gives the same answer, bit for bit.
+    :param population: swarm (or population) size.
+    :param max_iter: iteration cap.
+    :param tol: convergence precision (Table 4), the stopping rule's least improvement of F.
+    :param shaping: the rewards-and-punishment settings (Table 4 defaults).
+    :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
     """
     arm = arm if arm is not None else paper_arm()
     mode = Mode(mode)
@@ -132,15 +138,21 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     clock = time.perf_counter()
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
-    common = dict(goal=goal_arr, algorithm=algorithm, mode=mode.value, omega=float(omega))
+    common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega)}
     try:
         obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping)
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
                                   seed=seed, **(options or {}))
+    return _outcome(obj, found, tolerance, clock, common)
+
+
+def _outcome(obj: Objective, found: OptimizeResult, tolerance: float, clock: float,
+             common: dict[str, Any]) -> PlanResult:
+    """Return the result of a search: the joint goal, its errors, the status and a message."""
     joint_goal = obj.full(found.x)[0]
-    p, u = arm.tool(joint_goal[None, :])
+    p, u = obj.arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
     radial_err = (float(abs(np.arccos(np.clip(u[0, 2], -1, 1)) - np.arccos(obj.axis_target)))
                   if obj.radial else float('nan'))

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Local polish of candidate joint goals: exact reach, then least motion time along the solutions.
 
@@ -44,7 +46,7 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
-    Real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), numerically stable.
+    Return the real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), stably.
 
     Call inside np.errstate(divide="ignore", invalid="ignore").
     """
@@ -57,9 +59,9 @@ def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, 
 def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
                   zhi: np.ndarray) -> np.ndarray:
     """
-    argmin over z in [zlo, zhi] of max_i |b_i + n_i z + a_i z^2|, ties to least total travel.
+    Return the z in [zlo, zhi] that minimises max_i |b_i + n_i z + a_i z^2|.
 
-    b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
+    Ties go to the least total travel. b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
     """
     iu, ju = _pairs(b.shape[1])
     bt, nt, at = b.T, n.T, a.T                                         # (m, K): fast broadcasting
@@ -80,15 +82,19 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
 
 def _inverse(m: np.ndarray) -> np.ndarray:
     """
-    Inverses of symmetric matrices (K, s, s): the adjugate formula for s = 3 (the position
-    constraints; several times cheaper than LAPACK on small batches), np.linalg.inv otherwise.
+    Return the inverses of symmetric matrices (K, s, s).
+
+    The adjugate formula for s = 3 (the position constraints; several times cheaper than LAPACK
+    on small batches), np.linalg.inv otherwise.
     """
     if m.shape[1] != 3:
         return np.linalg.inv(m)
     a, b, c, _, d, e, _, _, f = m.reshape(-1, 9).T
-    cof = (d * f - e * e, c * e - b * f, b * e - c * d, a * f - c * c, b * c - a * e, a * d - b * b)
+    cof = (d * f - e * e, c * e - b * f, b * e - c * d,
+           a * f - c * c, b * c - a * e, a * d - b * b)
     inv_det = 1.0 / (a * cof[0] + b * cof[1] + c * cof[2])
-    return (np.array([cof[i] for i in (0, 1, 2, 1, 3, 4, 2, 4, 5)]) * inv_det).T.reshape(-1, 3, 3)
+    full = np.array([cof[i] for i in (0, 1, 2, 1, 3, 4, 2, 4, 5)])
+    return (full * inv_det).T.reshape(-1, 3, 3)
 
 
 def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
@@ -97,9 +103,12 @@ def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
 
 class _Linearisation:
     """
-    c(x), the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null space
-    and, along each null direction n, half the curvature of the solution set: x''/2 = -J^+ c''/2,
-    with c'' the exact second derivative of c along n (``ToolJacobian.curvature``).
+    The constraints c(x) linearised at K candidates x, with what a polish step needs.
+
+    That is c, the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null
+    space and, along each null direction n, half the curvature of the solution set:
+    x''/2 = -J^+ c''/2, with c'' the exact second derivative of c along n
+    (``ToolJacobian.curvature``).
 
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
@@ -107,12 +116,14 @@ class _Linearisation:
     projector I - J^+ J. ``curvature=False`` leaves the curvature out (zero), for speed.
     """
 
-    def __init__(self, obj: Objective, x: np.ndarray, weight: float, curvature: bool = True) -> None:
+    def __init__(self, obj: Objective, x: np.ndarray, weight: float,
+                 curvature: bool = True) -> None:
         d = obj.tool_jacobian(x)
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
         self.error = obj.residual_norm(self.c)
-        self.merit = self.time * obj.omega + weight * np.sqrt(np.einsum('kr,kr->k', self.c, self.c))
+        self.merit = (self.time * obj.omega
+                      + weight * np.sqrt(np.einsum('kr,kr->k', self.c, self.c)))
         jac = np.concatenate((d.jp, d.ju[:, 2:3]), axis=1) if obj.radial else d.jp
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)
@@ -179,13 +190,16 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
             with np.errstate(divide='ignore', invalid='ignore'):       # the joint limits along z
                 a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
             moving = np.abs(direction) > 1e-15
-            zlo = functools.reduce(np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -delta)
-            zhi = functools.reduce(np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, delta)
+            zlo = functools.reduce(
+                np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -delta)
+            zhi = functools.reduce(
+                np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, delta)
             zhi = np.maximum(zhi, zlo)
             z = _line_minimax(base - start, direction, half_curv, zlo, zhi)[:, None]
             base = base + (direction + half_curv * z) * z
         trial = np.clip(base, lo, hi)
-        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)   # second-order correction
+        # second-order correction
+        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)
         there = _Linearisation(obj, trial, weight)
         moved = np.einsum('km,km->k', trial - x, trial - x)
         accept = live & (there.merit < here.merit)
@@ -201,8 +215,9 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
 
 def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray:
     """
-    Samples (2 steps + 1, planned) of the curve of solutions of obj's constraints through x
-    (one null direction), in order along it with x in the middle.
+    Sample the curve of solutions of obj's constraints through x (one null direction).
+
+    Returns (2 steps + 1, planned) samples in order along the curve, with x in the middle.
 
     ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
     Newton correction), straight through the joint limits (angles wrapped to [-pi, pi)).
@@ -221,10 +236,12 @@ def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarra
     return np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))
 
 
-def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4, steps: int = 18) -> np.ndarray:
+def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4,
+                 steps: int = 18) -> np.ndarray:
     """
-    Seeds for ``polish`` from the curve through the solution x (planned,) that may lead to
-    faster solutions than x; empty when there is no such curve.
+    Return seeds for ``polish`` on the curve through the solution x (planned,).
+
+    The seeds may lead to faster solutions than x; there are none when there is no such curve.
 
     * With one null direction (free mode with four planned joints, radial mode with five) the
       solutions through x form a curve. Joint limits cut it into arcs, and the motion time

@@ -1,12 +1,14 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Exact minimum motion time for the paper's arm family, for tests and benchmarks only.
 
 Reaching a point with the yaw + three-parallel-pitch joints of Lv et al.'s arm leaves one free
 parameter, phi = theta2 + theta3 + theta4 (DH). For each phi there are at most four exact
 solutions: two base branches (q1 = atan2(y, x) with r = +rho, or q1 +- pi with r = -rho) and two
-elbow branches of the planar a2/a3 pair (NOTES.md). A dense sweep over phi followed by zooming
-in on the best samples gives the true minimum of R (eq. 10) to about 1e-10 s. The planner never
-calls this: it only exists to check optimisers independently.
+elbow branches of the planar a2/a3 pair (doc/paper.md, "The exact reference"). A dense sweep over
+phi followed by zooming in on the best samples gives the true minimum of R (eq. 10) to about
+1e-10 s. The planner never calls this: it only exists to check optimisers independently.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ class ExactOptimum:
 
 
 def radial_angle(goal: np.ndarray) -> float:
-    """Eq. (13): the angle between the base z axis and the goal vector p, in [0, pi]."""
+    """Return eps of eq. (13), the angle between the base z axis and the goal p, in [0, pi]."""
     g = np.asarray(goal, dtype=float)
     return float(np.arccos(np.clip(g[2] / np.linalg.norm(g), -1.0, 1.0)))
 
@@ -43,7 +45,7 @@ def _check_family(arm: ArmModel) -> None:
 
 
 def _solutions(arm: ArmModel, goal: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """All exact solutions q (len(phi), 4 branches, 4) for each phi; NaN where none exists."""
+    """Return all exact solutions q (len(phi), 4 branches, 4) for each phi; NaN where none."""
     a1, a2, a3, a4 = arm.a[:4]
     d5 = arm.d[4]
     x, y, z = goal
@@ -77,7 +79,7 @@ def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.
 def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
                   mode: str = 'free', samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
     """
-    True minimum of R = max|q - start| / omega over all in-limit q that reach ``goal`` exactly.
+    Return the least R = max|q - start| / omega over in-limit q that reach ``goal`` exactly.
 
     mode "free": sweep phi over [-pi, pi]; mode "radial": phi is fixed by eq. (12)-(13) to
     +-radial_angle(goal) (the tool axis at the goal's polar angle from the base z axis).

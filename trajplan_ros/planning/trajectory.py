@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Joint trajectory of the paper's servo model: every joint turns at one fixed angular velocity.
 
@@ -31,10 +33,11 @@ class Trajectory:
 
     @property
     def duration(self) -> float:
+        """Return the time of the last point, s."""
         return float(self.times[-1])
 
     def sample(self, t: np.ndarray) -> np.ndarray:
-        """Positions at arbitrary times t (clamped to [0, duration]) by linear interpolation."""
+        """Return positions at times t (clamped to [0, duration]) by linear interpolation."""
         t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
         start = self.positions[0] - self.velocities[0] * self.times[0]
         times = np.concatenate(([0.0], self.times))
@@ -46,7 +49,7 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
                      sample_period: float = 0.1,
                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
     """
-    The fixed-angular-velocity motion from ``start`` to ``goal`` (both (n_joints,), rad).
+    Return the fixed-angular-velocity motion from ``start`` to ``goal`` ((n_joints,), rad).
 
     A start equal to the goal (or within a microsecond of motion of it) gives one point at
     ``sample_period`` with zero velocity. A joint whose own motion is that short is not sampled
@@ -56,7 +59,8 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     goal = np.asarray(goal, dtype=float)
     if start.shape != goal.shape or start.ndim != 1:
         raise ValueError('start and goal must be joint vectors of the same length')
-    if not (np.isfinite(omega) and omega > 0 and np.isfinite(sample_period) and sample_period > 0):
+    if not (np.isfinite(omega) and omega > 0
+            and np.isfinite(sample_period) and sample_period > 0):
         raise ValueError('omega and sample_period must be finite and positive')
     names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
     delta = goal - start
