@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Fuzzy rewards and punishment (eq. 15-17, Tables 1, 2, 4) in metres."""
 import numpy as np
 import pytest
@@ -53,14 +55,46 @@ def test_log_scale_keeps_a_slope_where_the_literal_eq15_is_flat():
     err = np.array([2e-3, 1e-5])           # 2 mm and 10 um
     tau = np.zeros(2)
     flat = np.ptp(literal(err, tau, ERR_MAX))
-    assert flat < 3.0                      # NOTES.md: literal alpha barely changes
+    assert flat < 3.0                      # literal alpha barely changes (doc/paper.md)
     assert np.ptp(logged(err, tau, ERR_MAX)) > 100 * flat
 
 
+#: Table 1 of the paper as printed (columns VF SF LF LC BE ZC SC VC); it prints NPR for NRP.
+TABLE1_AS_PRINTED = """
+H VSP VSP VSP RSP NPR RLR RLR RSR
+M VSP VVP VVP RSP NPR RLR RLR RSR
+L VSP VVP RSP RSP NPR RLR RSR VSR
+"""
+#: Centres of the closeness sets VF..VC on lambda and of the H, M, L sets on tau.
+CLOSENESS_CENTRES = [-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]
+TIME_CENTRES = {'H': 1.0, 'M': 0.5, 'L': 0.0}
+
+
 def test_rule_table_is_table1():
-    assert RULE_TABLE['H'][0] == 'VSP' and RULE_TABLE['L'][-1] == 'VSR'
-    assert all(len(row) == 8 for row in RULE_TABLE.values())
-    assert set(sum(RULE_TABLE.values(), ())) <= set(OUTPUT_LEVELS)
+    printed = {}
+    for line in TABLE1_AS_PRINTED.strip().splitlines():
+        row, *cells = line.split()
+        printed[row] = tuple('NRP' if cell == 'NPR' else cell for cell in cells)
+    assert RULE_TABLE == printed
+
+
+@pytest.mark.parametrize('row', ['H', 'M', 'L'])
+def test_sharp_rules_give_each_cells_output_level_at_its_centre(row):
+    sharp = RewardPunishment(sigma=0.01)       # memberships vanish one set away from a centre
+    lam = np.array(CLOSENESS_CENTRES)
+    degree = sharp.rule_degree(lam, np.full(lam.shape, TIME_CENTRES[row]))
+    np.testing.assert_array_equal(degree, [OUTPUT_LEVELS[cell] for cell in RULE_TABLE[row]])
+
+
+def test_table1_punishes_less_as_the_error_closes_and_harder_when_slow():
+    sharp = RewardPunishment(sigma=0.01)
+    lam = np.array(CLOSENESS_CENTRES)
+    degree = {row: sharp.rule_degree(lam, np.full(lam.shape, tau))
+              for row, tau in TIME_CENTRES.items()}
+    for row in degree.values():
+        assert np.all(np.diff(row) >= 0)                  # VF -> VC: never more punishment
+    assert np.all(degree['H'] <= degree['M']) and np.all(degree['M'] <= degree['L'])
+    assert np.any(degree['H'] < degree['L'])
 
 
 def test_rules_punish_slow_particles_harder():
@@ -77,12 +111,12 @@ def test_without_reward_nothing_is_given_below_eps():
 
 
 def test_gaussian_membership_of_table2():
-    x = np.array([0.0, 1.0])
-    np.testing.assert_allclose(gaussian(x, 0.0, 1.0), [1.0, np.exp(-1)])
+    x = np.array([0.0, 1.0, 2.0])
+    np.testing.assert_allclose(gaussian(x, 1.0, 2.0), [np.exp(-0.25), 1.0, np.exp(-0.25)])
 
 
-@pytest.mark.parametrize('bad', [dict(eps=-1.0), dict(s=1e-3), dict(err_max=1e-9),
-                                 dict(lambda_scale='cubic'), dict(k=np.nan)])
+@pytest.mark.parametrize('bad', [{'eps': -1.0}, {'s': 1e-3}, {'err_max': 1e-9},
+                                 {'lambda_scale': 'cubic'}, {'k': np.nan}])
 def test_invalid_settings_are_refused(bad):
     with pytest.raises(ValueError):
         RewardPunishment(**bad)
