@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Shared fixtures for the ROS 2 integration tests (test_node*.py).
 

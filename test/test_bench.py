@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 ``trajplan bench``: seeded goals, one objective for every method, honest tables and CSV files.
 

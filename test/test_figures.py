@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """``trajplan figures`` writes every figure as a valid, non-blank PNG of the promised size."""
 from __future__ import annotations
 

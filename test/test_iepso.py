@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """IEPSO (eq. 3-5) with polish: exact answers against the reference, determinism, any arm."""
 import numpy as np
 import pytest

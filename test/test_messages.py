@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Conversion of plans into ROS messages, as pure functions: no DDS, no node."""
 import numpy as np
 from std_msgs.msg import Header

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The planner node over real DDS: the colcon-installed planner_node in its own process.
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 IEPSO: PSO with a local-global information-sharing term and last-elimination (section III).
 

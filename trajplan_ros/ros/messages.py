@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Conversion between the planning core's results and ROS messages, as pure functions."""
 from __future__ import annotations
 

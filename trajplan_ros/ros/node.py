@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The ROS 2 planner node ``trajplan`` (executable ``planner_node``): a thin shell around ``plan``.
 

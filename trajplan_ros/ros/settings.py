@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The planner node's parameters: one table of names, defaults and ranges, and their checking.
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """Command-line argument types and the usage error shared by the ``trajplan`` subcommands."""
 from __future__ import annotations
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.tools.bench_node``.
 

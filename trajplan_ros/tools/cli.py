@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """The ``trajplan`` command: plan goals from the shell, one at a time or from a CSV file."""
 from __future__ import annotations
 

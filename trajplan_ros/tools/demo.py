@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The ``trajplan demo`` subcommand: start the ROS 2 planner node and plan the paper's example.
 

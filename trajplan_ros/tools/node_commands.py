@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 ``trajplan call`` and ``trajplan goal``: talk to a running planner node from a plain venv.
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 A ROS 2 node of this process, spun on a background thread, for talking to the planner node.
 

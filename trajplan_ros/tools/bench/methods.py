@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The benchmark's methods: the paper's algorithms through ``plan``, and the peers scipy and pyswarms.
 

@@ -1,3 +1,5 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
 """
 The benchmark's report: the summary table, the failed plans, Table 5, and the CSV files.
 
