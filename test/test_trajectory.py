@@ -1,9 +1,12 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """The servo trajectory: fixed angular velocity, controller-ready timing."""
+import tracemalloc
+
 import numpy as np
 import pytest
 
+from trajplan_ros.planning import trajectory_points
 from trajplan_ros.planning.trajectory import servo_trajectory
 
 START = np.array([0.0, 0.5, -0.2, 0.1, 0.0])
@@ -60,3 +63,78 @@ def test_bad_arguments_raise():
         servo_trajectory(START, GOAL[:3], OMEGA)
     with pytest.raises(ValueError):
         servo_trajectory(START, GOAL, -1.0)
+
+
+def points(start, goal, omega, sample_period):
+    """Return (built, counted): the number of points of the trajectory, both ways."""
+    built = servo_trajectory(start, goal, omega, sample_period=sample_period).times.size
+    return built, trajectory_points(start, goal, omega, sample_period)
+
+
+def random_case(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Return a start, goal, omega and sample period, edge cases often, < 3e4 points."""
+    n = int(rng.integers(1, 8))
+    omega = float(rng.choice([1.0, 0.5, 0.2, rng.uniform(0.01, 3.0)]))
+    period = float(rng.choice([0.1, 0.3, 1 / 3, 0.05, 1e-3, 1e-4, 1e-5, 2e-6, 1.5e-6, 1e-6,
+                               9.99e-7, 5e-7, 1e-7, 3e-8, rng.uniform(1e-4, 1.0)]))
+    start = np.zeros(n) if rng.random() < 0.4 else rng.uniform(-3, 3, n)  # 0: exact arrivals
+    reach = min(6.0, 2e4 * period * omega)
+    steps = rng.integers(0, max(1, int(reach / omega / period)), n)
+    sign = rng.choice([-1.0, 1.0], n)
+    kind = rng.integers(0, 5)
+    if kind == 0:                                        # anywhere
+        delta = rng.uniform(-reach, reach, n)
+    elif kind == 1:                                      # arrivals on grid points
+        delta = sign * steps * period * omega
+    elif kind == 2:                                      # no motion, or within a microsecond
+        delta = sign * rng.choice([0.0, 1e-12, 1e-7 * omega, 1e-6 * omega, 2e-6 * omega], n)
+    elif kind == 3:                                      # arrivals a microsecond off grid points
+        off = rng.choice([-1e-6, -5e-7, 0.0, 5e-7, 1e-6, 1.0000001e-6], n)
+        delta = sign * (steps * period + off) * omega
+    else:                                                # some joints still
+        delta = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(-reach, reach, n))
+    return start, start + delta, omega, period
+
+
+def test_points_are_counted_as_built_on_thousands_of_cases():
+    rng = np.random.default_rng(7)
+    for case in range(3000):
+        start, goal, omega, period = random_case(rng)
+        built, counted = points(start, goal, omega, period)
+        assert counted == built, (case, start.tolist(), goal.tolist(), omega, period)
+
+
+@pytest.mark.parametrize('goal, omega, period, expected', [
+    (START, OMEGA, 0.1, 1),                                   # no motion: one resting point
+    (START + 1e-7, OMEGA, 0.1, 1),                            # within a microsecond
+    (START + np.array([0.5, 0, 0, 0, 0]), 0.5, 0.25, 4),      # 0.25 0.5 0.75 1.0: on the grid
+    (START + np.array([0.5, 0.25, 0, 0, 0]), 0.5, 0.3, 5),    # 0.3 0.5 0.6 0.9 1.0
+    (START + np.array([0.5, 0.25 + 2e-7, 0, 0, 0]), 0.5, 0.25, 4),    # arrival merges in
+    (START + np.array([1.0, 0, 0, 0, 0]), 1.0, 1e-4, 10000),  # a tiny period
+    (START + np.array([1.0, 0, 0, 0, 0]), 1.0, 1e-7, 1),      # below the microsecond: merged
+])
+def test_edge_cases(goal, omega, period, expected):
+    assert points(START, goal, omega, period) == (expected, expected)
+
+
+def test_counting_needs_no_arrays_of_the_trajectorys_length():
+    # a 1e4 s motion sampled every 2^-10 s (exact grid times): 10,240,000 grid points, which
+    # the arrivals at 2000.5 s and 4000 s land on, plus one at 0.6 s; the 2 ns one is no point
+    start = np.zeros(5)
+    goal = np.array([5000.0, 1000.25, -2000.0, 0.3, 1e-9])
+    tracemalloc.start()
+    try:
+        counted = trajectory_points(start, goal, 0.5, 2.0 ** -10)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert counted == 10_240_001
+    assert peak < 100_000                                 # bytes; the times alone take 80 MB
+    assert trajectory_points(start, goal, 0.5, 0.5) == 20_000 + 1
+
+
+def test_counting_checks_its_arguments_like_the_trajectory():
+    for args in ((START, GOAL[:3], OMEGA, 0.1), (START, GOAL, -1.0, 0.1),
+                 (START, GOAL, OMEGA, 0.0), (START, GOAL, np.nan, 0.1)):
+        with pytest.raises(ValueError):
+            trajectory_points(*args)

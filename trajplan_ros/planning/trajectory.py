@@ -9,6 +9,8 @@ is sampled every ``sample_period`` seconds, plus one point at each joint's arriv
 end, so the samples are exact corners of the motion. Points carry positions and velocities;
 the last has zero velocity everywhere. Times are strictly increasing and above zero, the form
 joint_trajectory_controller accepts (the first point is not the start itself).
+``trajectory_points`` counts those points without building them, to refuse a long trajectory
+first.
 """
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ['Trajectory', 'servo_trajectory']
+__all__ = ['Trajectory', 'servo_trajectory', 'trajectory_points']
 
 #: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
 _RESOLUTION = 1e-6
@@ -45,6 +47,20 @@ class Trajectory:
         return np.stack([np.interp(t, times, pos[:, j]) for j in range(pos.shape[1])], axis=-1)
 
 
+def _motion(start: np.ndarray, goal: np.ndarray, omega: float,
+            sample_period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Check the arguments; return start, goal, each joint's arrival time and the duration R."""
+    start = np.asarray(start, dtype=float)
+    goal = np.asarray(goal, dtype=float)
+    if start.shape != goal.shape or start.ndim != 1:
+        raise ValueError('start and goal must be joint vectors of the same length')
+    if not (np.isfinite(omega) and omega > 0
+            and np.isfinite(sample_period) and sample_period > 0):
+        raise ValueError('omega and sample_period must be finite and positive')
+    arrive = np.abs(goal - start) / omega
+    return start, goal, arrive, float(arrive.max())
+
+
 def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
                      sample_period: float = 0.1,
                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
@@ -55,17 +71,9 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     ``sample_period`` with zero velocity. A joint whose own motion is that short is not sampled
     at its arrival, so no point lands at the start itself.
     """
-    start = np.asarray(start, dtype=float)
-    goal = np.asarray(goal, dtype=float)
-    if start.shape != goal.shape or start.ndim != 1:
-        raise ValueError('start and goal must be joint vectors of the same length')
-    if not (np.isfinite(omega) and omega > 0
-            and np.isfinite(sample_period) and sample_period > 0):
-        raise ValueError('omega and sample_period must be finite and positive')
+    start, goal, arrive, duration = _motion(start, goal, omega, sample_period)
     names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
     delta = goal - start
-    arrive = np.abs(delta) / omega
-    duration = float(arrive.max())
     if duration <= _RESOLUTION:
         t = np.array([sample_period])
     else:
@@ -81,3 +89,72 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     positions[-1] = goal
     velocities = np.where(moving, direction * omega, 0.0)
     return Trajectory(tuple(names), t, positions, velocities)
+
+
+def trajectory_points(start: np.ndarray, goal: np.ndarray, omega: float,
+                      sample_period: float = 0.1) -> int:
+    """
+    Return how many points ``servo_trajectory`` gives for these arguments, without building it.
+
+    In O(number of joints) time and memory: the grid times k * ``sample_period`` form runs of
+    points one period apart, which are counted whole; only the points next to the arrivals and
+    the end (eq. 10) are looked at one by one, with the same floating-point times and the same
+    microsecond merging as ``servo_trajectory``. The one exception is a period within rounding
+    of that microsecond, where neighbouring grid points may or may not merge: there the runs are
+    counted in fixed-size chunks (bounded memory, time linear in their length).
+    """
+    _, _, arrive, duration = _motion(start, goal, omega, sample_period)
+    if duration <= _RESOLUTION:
+        return 1
+    last = int(np.floor(duration / sample_period))        # grid times k * period, k = 1..last
+    first = _grid_count(_RESOLUTION, sample_period, last) + 1
+    final = _grid_count(duration, sample_period, last)    # grid points kept: first..final
+    corners = {float(a) for a in arrive if a > _RESOLUTION} | {duration}
+    # the points in sorted order, each with its grid index (None for an arrival off the grid):
+    # every corner, the grid points on either side of it and the first and last grid point
+    points: dict[float, int | None] = dict.fromkeys(corners)
+    near = {first, final}.union(*({k, k + 1} for k in
+                                  (_grid_count(c, sample_period, last) for c in corners)))
+    points.update((float(k) * sample_period, k) for k in near if first <= k <= final)
+    times = sorted(points)
+    kept = 1                                               # the last point is always kept
+    for a, b in zip(times, times[1:]):
+        ka, kb = points[a], points[b]
+        if ka is not None and kb is not None and kb > ka + 1:     # a run of grid points
+            kept += _spaced_grid_gaps(ka, kb, sample_period)
+        else:
+            kept += b - a > _RESOLUTION
+    return kept
+
+
+def _grid_count(value: float, period: float, last: int) -> int:
+    """
+    Return how many grid times k * period (k = 1..last, as numpy rounds them) are <= value.
+
+    From the estimate value / period, checked against its neighbours, else by bisection.
+    """
+    guess = min(max(int(value / period), 0), last)
+    low, high = max(guess - 2, 0), min(guess + 2, last)
+    if low > 0 and float(low) * period > value:
+        low = 0
+    if high < last and float(high + 1) * period <= value:
+        high = last
+    while low < high:                       # the largest k in [low, high] with k * period <= value
+        mid = (low + high + 1) // 2
+        low, high = (mid, high) if float(mid) * period <= value else (low, mid - 1)
+    return low
+
+
+def _spaced_grid_gaps(first: int, last: int, period: float) -> int:
+    """Return how many gaps between the grid times first..last exceed the merging microsecond."""
+    # each gap is the period within a rounding error of the larger time
+    rounding = 2.0 ** -50 * last * period
+    if period - _RESOLUTION > rounding:
+        return last - first
+    if _RESOLUTION - period > rounding:
+        return 0
+    count, chunk = 0, 1 << 16
+    for k in range(first, last, chunk):
+        times = np.arange(k, min(k + chunk, last) + 1) * period
+        count += int(np.count_nonzero(np.diff(times) > _RESOLUTION))
+    return count
