@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import pytest
+from trajplan_ros.planning import planner
 from trajplan_ros.tools.cli import main
 
 
@@ -39,10 +40,23 @@ def test_goals_file_keeps_order_and_reports_bad_lines(tmp_path, capsys):
     assert lines[4]['joint_goal'] is not None
 
 
+def test_plan_past_max_planning_time_is_timed_out(monkeypatch, capsys):
+    clock = iter(range(1000))                       # one second per reading, never the real one
+    monkeypatch.setattr(planner, '_clock', lambda: float(next(clock)))
+    # an out-of-reach goal: the search would go on for dozens of iterations
+    assert main(['plan', '0.36', '0', '0.05', '--json', '--max-planning-time', '3']) == 1
+    record = json.loads(capsys.readouterr().out)
+    assert record['status'] == 'timed_out' and record['success'] is False
+    assert record['iterations'] == 3 and record['joint_goal'] is not None
+    assert record['message'].startswith('planning ran past max_planning_time 3 s; best position '
+                                        'error ')
+
+
 @pytest.mark.parametrize('argv, reason', [
     (['plan', '0.1', '0.2'], 'X Y Z'),
     (['plan', *TARGET, '--start', '0', '0', '0', '0', '0', '0'], 'at most 5'),
     (['plan', '--goals', '/nonexistent/goals.csv'], 'cannot read'),
+    (['plan', *TARGET, '--max-planning-time', '0'], 'max_planning_time'),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, reason, capsys):
     assert main(argv) == 2

@@ -1,6 +1,8 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """IEPSO (eq. 3-5) with polish: exact answers against the reference, determinism, any arm."""
+import itertools
+
 import numpy as np
 import pytest
 
@@ -234,6 +236,43 @@ def test_other_chains_reach_goals_from_their_own_configurations(n):
         goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, n)))[0][0]
         res = iepso(Objective(arm, goal, np.zeros(n)), seed=k)
         assert res.error <= 1e-6, (n, k)
+
+
+def interrupt_after(k: int, reason: str = 'enough'):
+    """Return an interrupt that carries on for its first k asks, then gives ``reason``."""
+    asks = itertools.count()
+    return lambda: reason if next(asks) >= k else None
+
+
+#: Out of reach: IEPSO searches it for dozens of iterations, then stops unconverged.
+FAR = np.array([0.36, 0.0, 0.05])
+
+
+@pytest.mark.parametrize('goal, polish, max_iter', [(TARGET, True, 1000), (FAR, True, 1000),
+                                                    (TARGET, False, 400), (FAR, False, 120)])
+def test_an_interrupt_that_never_fires_changes_nothing(goal, polish, max_iter):
+    obj = Objective(ARM, goal, np.zeros(5))
+    asked = []
+    plain = iepso(obj, seed=2, polish=polish, max_iter=max_iter)
+    watched = iepso(obj, seed=2, polish=polish, max_iter=max_iter,
+                    interrupt=lambda: asked.append(1))                  # None, and counts asks
+    assert watched.x.tobytes() == plain.x.tobytes() and watched.fun == plain.fun
+    assert (watched.nit, watched.nfev, watched.converged) == (plain.nit, plain.nfev,
+                                                              plain.converged)
+    assert watched.history_fun.tobytes() == plain.history_fun.tobytes()
+    assert watched.interrupted is plain.interrupted is None
+    # asked after every iteration but the one that the stopping rule ends
+    stopped_by_rule = plain.nit < max_iter
+    assert len(asked) == plain.nit - stopped_by_rule
+
+
+@pytest.mark.parametrize('polish', [True, False])
+def test_an_interrupt_ends_the_run_with_the_best_so_far(polish):
+    obj = Objective(ARM, FAR, np.zeros(5))
+    res = iepso(obj, seed=2, polish=polish, max_iter=120, interrupt=interrupt_after(7, 'late'))
+    assert res.interrupted == 'late' and not res.converged
+    assert res.nit == res.history_fun.size == 8
+    assert res.fun == pytest.approx(res.history_fun.min(), rel=1e-6)
 
 
 def test_bad_settings_raise():

@@ -1,17 +1,23 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """plan(): the library entry point used by the command and the node."""
+import itertools
 import json
+from typing import Callable
 
 import numpy as np
 import pytest
 
 from trajplan_ros import DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
+from trajplan_ros.planning import planner
+from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.planning.planner import ALGORITHMS
 
 TARGET = PAPER_TARGET.tolist()
+#: Inside the reach sphere but out of reach: IEPSO searches it for dozens of iterations.
+FAR = [0.36, 0.0, 0.05]
 KEYS = {'goal', 'success', 'status', 'joint_goal', 'position_error_m', 'radial_error_rad',
         'motion_time_s', 'efficiency', 'iterations', 'evaluations', 'plan_time_s', 'algorithm',
         'mode', 'message'}
@@ -72,14 +78,14 @@ def test_bad_requests_are_rejected_with_a_reason(goal, start):
 
 
 def test_inside_the_sphere_but_unreachable_is_reported_not_reached():
-    result = plan([0.36, 0.0, 0.05], seed=0)   # 0.363 m < reach bound 0.374 m, arm max ~0.35 m
+    result = plan(FAR, seed=0)   # 0.363 m < reach bound 0.374 m, arm max ~0.35 m
     assert result.status is PlanStatus.NOT_REACHED
     assert result.position_error_m > 1e-3
     assert 'not reached' in result.message
 
 
 def test_tolerance_decides_success():
-    loose = plan([0.36, 0.0, 0.05], seed=0, tolerance=0.05)
+    loose = plan(FAR, seed=0, tolerance=0.05)
     assert loose.success
     assert DEFAULT_TOLERANCE < loose.position_error_m <= 0.05   # missed, but within tolerance
 
@@ -101,3 +107,107 @@ def test_bad_settings_raise():
         plan(TARGET, mode='sideways')
     with pytest.raises(ValueError):
         plan(TARGET, tolerance=-1)
+
+
+class FakeClock:
+    """A clock that advances by ``step`` seconds every time it is read (never the wall clock)."""
+
+    def __init__(self, step: float) -> None:
+        self.now, self.step, self.reads = 0.0, step, 0
+
+    def __call__(self) -> float:
+        self.now += self.step
+        self.reads += 1
+        return self.now
+
+
+def calls_after(k: int) -> Callable[[], bool]:
+    """Return a stop hook that is False for its first k calls, then True."""
+    calls = itertools.count()
+    return lambda: next(calls) >= k
+
+
+def same_search(a, b) -> bool:
+    return (a.joint_goal.tobytes() == b.joint_goal.tobytes() and a.iterations == b.iterations
+            and a.evaluations == b.evaluations and a.efficiency.hex() == b.efficiency.hex()
+            and a.history_efficiency.tobytes() == b.history_efficiency.tobytes())
+
+
+@pytest.mark.parametrize('goal, algorithm, mode', [
+    (TARGET, 'iepso', 'free'), (TARGET, 'iepso', 'radial'), (FAR, 'iepso', 'free'),
+    (TARGET, 'pso', 'free'), (TARGET, 'de', 'radial')])
+def test_a_deadline_and_a_stop_that_never_fire_change_nothing(goal, algorithm, mode):
+    settings = {'algorithm': algorithm, 'mode': mode, 'seed': 1, 'max_iter': 200}
+    alone = plan(goal, **settings)
+    asked = plan(goal, max_planning_time=1000.0, stop=lambda: False, **settings)
+    assert same_search(alone, asked)                              # bit for bit
+    assert asked.status is alone.status and asked.message == alone.message
+
+
+def test_stop_from_the_start_cancels_after_the_first_iteration():
+    result = plan(TARGET, seed=1, stop=lambda: True)
+    assert result.status is PlanStatus.CANCELLED and not result.success
+    assert result.message == 'planning stopped before the end'
+    assert result.iterations == 1
+    assert result.joint_goal is not None and np.isfinite(result.position_error_m)
+    record = json.loads(json.dumps(result.to_dict(), allow_nan=False))
+    assert record['status'] == 'cancelled' and record['success'] is False
+
+
+def test_stop_is_asked_once_per_iteration():
+    full = plan(FAR, seed=0)
+    assert full.iterations > 20
+    result = plan(FAR, seed=0, stop=calls_after(11))              # True at the twelfth ask
+    assert result.status is PlanStatus.CANCELLED
+    assert result.iterations == 12 < full.iterations
+
+
+def test_deadline_times_out_with_the_best_answer_found(monkeypatch):
+    clock = FakeClock(step=0.125)
+    monkeypatch.setattr(planner, '_clock', clock)
+    # read once to set the deadline, then once per iteration: past 1.5 s at the twelfth
+    result = plan(FAR, seed=0, max_planning_time=1.5)
+    assert result.status is PlanStatus.TIMED_OUT and not result.success
+    assert result.iterations == 12 and clock.reads == 13
+    assert result.message == ('planning ran past max_planning_time 1.5 s; best position '
+                              f'error {result.position_error_m:.3g} m')
+    assert 1e-3 < result.position_error_m < 0.1 and '\n' not in result.message
+    # the answer is the best of the twelve iterations (F evaluated once more), the one a run
+    # interrupted there returns
+    assert result.history_efficiency[-1] == result.history_efficiency.min()
+    assert result.efficiency == pytest.approx(result.history_efficiency[-1], rel=1e-6)
+    assert result.position_error_m == pytest.approx(result.history_error[-1], rel=1e-6)
+    asks = itertools.count(1)
+    direct = iepso(Objective(paper_arm(), np.array(FAR), np.zeros(5)), seed=0,
+                   interrupt=lambda: 'late' if next(asks) >= 12 else None)
+    assert result.joint_goal[:4].tobytes() == direct.x.tobytes()
+    assert (result.iterations, result.evaluations) == (direct.nit, direct.nfev)
+    record = json.loads(json.dumps(result.to_dict(), allow_nan=False))
+    assert record['status'] == 'timed_out' and record['success'] is False
+    assert record['joint_goal'] == result.joint_goal.tolist()
+
+
+@pytest.mark.parametrize('algorithm', ['pso', 'ga'])
+def test_a_comparison_algorithm_times_out_too(monkeypatch, algorithm):
+    monkeypatch.setattr(planner, '_clock', FakeClock(step=1.0))
+    result = plan(TARGET, algorithm=algorithm, seed=0, max_planning_time=3.0)
+    assert result.status is PlanStatus.TIMED_OUT and result.iterations == 3
+    assert result.message.startswith('planning ran past max_planning_time 3 s; best position')
+    assert result.efficiency == pytest.approx(result.history_efficiency.min(), rel=1e-6)
+
+
+def test_stop_is_asked_before_the_clock(monkeypatch):
+    monkeypatch.setattr(planner, '_clock', FakeClock(step=1.0))
+    result = plan(TARGET, algorithm='de', seed=0, max_planning_time=2.0, stop=calls_after(1))
+    assert result.status is PlanStatus.CANCELLED and result.iterations == 2
+
+
+@pytest.mark.parametrize('limit', [0, -1.0, float('nan'), float('inf')])
+def test_a_bad_planning_time_raises(limit):
+    with pytest.raises(ValueError, match='max_planning_time'):
+        plan(TARGET, max_planning_time=limit)
+
+
+def test_a_stop_that_cannot_be_called_raises():
+    with pytest.raises(ValueError, match='stop'):
+        plan(TARGET, stop=True)

@@ -5,7 +5,8 @@ The comparison algorithms of section VI.B: PSO, SPSO, GA and DE on the same obje
 
 Each takes the objective, a population size, an iteration cap and a seed, vectorised over the
 population, and stops by the same rule as IEPSO without polish (``optimize.History``), so with
-the defaults every algorithm has the same budget of population x max_iter evaluations.
+the defaults every algorithm has the same budget of population x max_iter evaluations. Like
+IEPSO, each asks its ``interrupt`` (if any) after every iteration that the rule has not ended.
 The paper does not give their settings; ours are the textbook ones:
 
 * PSO: inertia 0.9 -> 0.4, C1 = C2 = 2, global best (IEPSO without phi3 and elimination).
@@ -22,7 +23,8 @@ from typing import Callable
 import numpy as np
 
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.optimize import History, initial_population, OptimizeResult
+from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
+                                            OptimizeResult)
 
 __all__ = ['pso', 'spso', 'ga', 'de']
 
@@ -33,7 +35,8 @@ class _Run:
     """State shared by the population methods: evaluation, elitist best, history, stopping."""
 
     def __init__(self, obj: Objective, population: int, max_iter: int, tol: float,
-                 seed: int | np.random.Generator | None) -> None:
+                 seed: int | np.random.Generator | None,
+                 interrupt: Interrupt | None = None) -> None:
         if population < 4 or max_iter < 1:
             raise ValueError('population must be >= 4 and max_iter >= 1')
         self.obj, self.rng = obj, np.random.default_rng(seed)
@@ -41,6 +44,8 @@ class _Run:
         self.history = History(max_iter, tol, _PATIENCE, obj.shaping.eps)
         self.max_iter, self.nfev = max_iter, 0
         self.best_x, self.best_f, self.best_err = None, np.inf, np.inf
+        self.interrupt = interrupt
+        self.converged, self.interrupted = False, None
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
         """Return F for the rows of x, counting them and keeping the best one seen."""
@@ -52,18 +57,23 @@ class _Run:
         return ev.efficiency
 
     def step_done(self) -> bool:
-        """Record the iteration's best; return True when the stopping rule fires."""
+        """Record the iteration's best; return True when the stopping rule or interrupt ends it."""
         self.history.record(float(self.best_f), float(self.best_err))
-        return self.history.stalled()
+        self.converged = self.history.stalled()
+        if not self.converged:
+            self.interrupted = asked(self.interrupt)
+        return self.converged or self.interrupted is not None
 
-    def result(self, converged: bool) -> OptimizeResult:
+    def result(self) -> OptimizeResult:
         """Return the best answer as an ``OptimizeResult``."""
-        return self.history.result(self.obj, self.best_x, self.nfev, converged)
+        return self.history.result(self.obj, self.best_x, self.nfev, self.converged,
+                                   self.interrupted)
 
 
 def _swarm(obj: Objective, population: int, max_iter: int, tol: float,
-           seed: int | np.random.Generator | None, *, constricted: bool) -> OptimizeResult:
-    run = _Run(obj, population, max_iter, tol, seed)
+           seed: int | np.random.Generator | None, interrupt: Interrupt | None, *,
+           constricted: bool) -> OptimizeResult:
+    run = _Run(obj, population, max_iter, tol, seed, interrupt)
     lo, hi = run.lo, run.hi
     vmax = 0.2 * (hi - lo)
     x = initial_population(run.rng, lo, hi, (population,))
@@ -89,20 +99,22 @@ def _swarm(obj: Objective, population: int, max_iter: int, tol: float,
         better = f < pbest_f
         pbest[better], pbest_f[better] = x[better], f[better]
         if run.step_done():
-            return run.result(True)
-    return run.result(False)
+            break
+    return run.result()
 
 
 def pso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-        seed: int | np.random.Generator | None = None) -> OptimizeResult:
+        seed: int | np.random.Generator | None = None,
+        interrupt: Interrupt | None = None) -> OptimizeResult:
     """Run the standard inertia-weight PSO with a global best."""
-    return _swarm(obj, population, max_iter, tol, seed, constricted=False)
+    return _swarm(obj, population, max_iter, tol, seed, interrupt, constricted=False)
 
 
 def spso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-         seed: int | np.random.Generator | None = None) -> OptimizeResult:
+         seed: int | np.random.Generator | None = None,
+         interrupt: Interrupt | None = None) -> OptimizeResult:
     """Run Standard PSO 2007: constriction coefficients and a ring topology."""
-    return _swarm(obj, population, max_iter, tol, seed, constricted=True)
+    return _swarm(obj, population, max_iter, tol, seed, interrupt, constricted=True)
 
 
 #: One generation of a population method: (run, x, f) -> (x, f).
@@ -110,17 +122,17 @@ _Generation = Callable[[_Run, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndar
 
 
 def _generations(obj: Objective, population: int, max_iter: int, tol: float,
-                 seed: int | np.random.Generator | None,
+                 seed: int | np.random.Generator | None, interrupt: Interrupt | None,
                  generation: _Generation) -> OptimizeResult:
-    """Run ``generation(run, x, f) -> (x, f)`` until the stopping rule or the iteration cap."""
-    run = _Run(obj, population, max_iter, tol, seed)
+    """Run ``generation(run, x, f) -> (x, f)`` until the stopping rule, interrupt or cap."""
+    run = _Run(obj, population, max_iter, tol, seed, interrupt)
     x = initial_population(run.rng, run.lo, run.hi, (population,))
     f = run.evaluate(x)
     for _ in range(max_iter):
         x, f = generation(run, x, f)
         if run.step_done():
-            return run.result(True)
-    return run.result(False)
+            break
+    return run.result()
 
 
 def _ga_generation(run: _Run, x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -155,12 +167,14 @@ def _de_generation(run: _Run, x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray,
 
 
 def ga(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-       seed: int | np.random.Generator | None = None) -> OptimizeResult:
+       seed: int | np.random.Generator | None = None,
+       interrupt: Interrupt | None = None) -> OptimizeResult:
     """Run a real-coded GA with tournament selection, BLX-0.5 and Gaussian mutation."""
-    return _generations(obj, population, max_iter, tol, seed, _ga_generation)
+    return _generations(obj, population, max_iter, tol, seed, interrupt, _ga_generation)
 
 
 def de(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: float = 1e-7,
-       seed: int | np.random.Generator | None = None) -> OptimizeResult:
+       seed: int | np.random.Generator | None = None,
+       interrupt: Interrupt | None = None) -> OptimizeResult:
     """Run differential evolution, DE/rand/1/bin with F = 0.5 and CR = 0.9."""
-    return _generations(obj, population, max_iter, tol, seed, _de_generation)
+    return _generations(obj, population, max_iter, tol, seed, interrupt, _de_generation)

@@ -43,6 +43,12 @@ Additions of ours, documented in the README, each on by default because it measu
   the paper's convergence precision), or after ``max_iter`` iterations. F itself is not
   compared for agreement: eq. (17) changes it by 0.024 per picometre of error, far below any
   meaningful difference;
+* an ``interrupt`` (the planner's deadline and stop hook), if given, is asked at the end of
+  every iteration that the stopping rule has not ended, and its reason ends the run with the
+  best answer so far (``OptimizeResult.interrupted``). Asking draws no random numbers, so a run
+  it never ends is bit-identical. Between two asks there is one iteration and at most one polish
+  round: a few milliseconds with the defaults (the curve search, as short, runs only once the
+  stopping rule has fired);
 * a curve search (``_curve_search``) when the run stops on an answer that fewer than
   ``curve_search`` (15) refined candidates agree on: with one free direction (free mode with
   four planned joints, radial mode with five) the solutions through the answer form a curve,
@@ -66,7 +72,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trajplan_ros.planning.objective import Evaluation, Objective
-from trajplan_ros.planning.optimize import History, initial_population, OptimizeResult
+from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
+                                            OptimizeResult)
 from trajplan_ros.planning.polish import curve_minima, polish as polish_candidates
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
@@ -348,7 +355,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
           restart: bool = True, curve_search: int = 15, elimination: float = 0.1,
           elimination_period: int = 5, inertia: tuple[float, float] = (0.9, 0.4),
           c1: float = 2.0, c2: float = 2.0, c3: tuple[float, float] = (2.0, 0.0),
-          max_velocity: float = 0.2) -> OptimizeResult:
+          max_velocity: float = 0.2, interrupt: Interrupt | None = None) -> OptimizeResult:
     """
     Minimise ``obj`` over the planned joints with IEPSO; see the module docstring.
 
@@ -356,7 +363,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
     ``RADIAL_DEFAULTS``). Without ``polish`` this is the paper's algorithm alone, stopped by
-    ``History.stalled``.
+    ``History.stalled``. ``interrupt`` is asked after every iteration the stopping rule has not
+    ended; its reason ends the run with the best answer so far (see the module docstring).
     """
     swarms, polish_count, polish_steps = _settings(obj, population, max_iter, polish_period,
                                                    swarms, polish_count, polish_steps)
@@ -368,7 +376,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     history = History(max_iter, tol, patience=50, eps=obj.shaping.eps)
     stopping = _Stopping(tol, patience_rounds, agreement, obj.shaping.eps)
     enough = _polish_is_enough(agreement, obj.arm.reach / 8)
-    stop = converged = False
+    stop, converged, interrupted = False, False, None
     for it in range(max_iter):
         # the paper's iteration: eq. (3)-(5) and last-elimination, with w and c3 scheduled
         frac = it / max(max_iter - 1, 1)
@@ -392,7 +400,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
         history.record(*swarm.best())
         if not polish and history.stalled():
             converged = stop = True
-        if stop:
+        if stop or (interrupted := asked(interrupt)) is not None:
             break
     s = swarm.best_swarm()
-    return history.result(obj, swarm.pbest[s, swarm.gbest_index[s]], nfev, converged)
+    return history.result(obj, swarm.pbest[s, swarm.gbest_index[s]], nfev, converged,
+                          interrupted)

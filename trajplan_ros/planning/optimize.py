@@ -4,12 +4,19 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from trajplan_ros.planning.objective import Objective
 
-__all__ = ['OptimizeResult', 'History', 'initial_population']
+__all__ = ['OptimizeResult', 'History', 'Interrupt', 'asked', 'initial_population']
+
+#: Asked by an optimiser once per iteration, after recording it: None to carry on, or the reason
+#: to end the run now with the best answer so far (the result's ``interrupted``). The optimiser
+#: only calls it (no random numbers, no arithmetic), so a run it never ends is bit-identical to
+#: a run without it.
+Interrupt = Callable[[], str | None]
 
 
 @dataclass
@@ -34,6 +41,8 @@ class OptimizeResult:
     history_fun: np.ndarray = field(repr=False)
     #: The error of that best F after every iteration.
     history_error: np.ndarray = field(repr=False)
+    #: The interrupt's reason when it ended the run before the stopping rule, else None.
+    interrupted: str | None = None
 
 
 class History:
@@ -63,14 +72,20 @@ class History:
             return False
         return self.fun[self.n - 1 - self.patience] - self.fun[self.n - 1] < self.tol
 
-    def result(self, obj: Objective, x: np.ndarray, nfev: int,
-               converged: bool) -> OptimizeResult:
+    def result(self, obj: Objective, x: np.ndarray, nfev: int, converged: bool,
+               interrupted: str | None = None) -> OptimizeResult:
         """Return the ``OptimizeResult`` for the answer x (planned,), evaluated once more."""
         ev = obj(x[None, :])
         return OptimizeResult(
             x=x.copy(), fun=float(ev.efficiency[0]), motion_time=float(ev.motion_time[0]),
             error=float(ev.error[0]), nit=self.n, nfev=nfev, converged=converged,
-            history_fun=self.fun[: self.n].copy(), history_error=self.error[: self.n].copy())
+            history_fun=self.fun[: self.n].copy(), history_error=self.error[: self.n].copy(),
+            interrupted=interrupted)
+
+
+def asked(interrupt: Interrupt | None) -> str | None:
+    """Return the interrupt's reason to end the run now, or None (also without an interrupt)."""
+    return None if interrupt is None else interrupt()
 
 
 def initial_population(rng: np.random.Generator, lower: np.ndarray, upper: np.ndarray,

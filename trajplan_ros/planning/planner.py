@@ -9,6 +9,10 @@ Direct trajectory planning (Lv et al. 2019): search the final joint angles, then
     >>> result = plan([0.151171, 0.19162, 0.172124], seed=1)
     >>> result.status, round(result.motion_time_s, 3)
     (<PlanStatus.SUCCEEDED: 'succeeded'>, 4.514)
+
+A caller that must bound the search gives ``max_planning_time`` (s, on ``time.monotonic``)
+and/or ``stop`` (a callable, e.g. true after Ctrl-C). The optimiser asks both once per
+iteration; either ends the search with its best answer so far, as TIMED_OUT or CANCELLED.
 """
 from __future__ import annotations
 
@@ -24,7 +28,7 @@ from trajplan_ros.planning.baselines import de, ga, pso, spso
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
-from trajplan_ros.planning.optimize import OptimizeResult
+from trajplan_ros.planning.optimize import Interrupt, OptimizeResult
 from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
 
 __all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_TOLERANCE']
@@ -35,6 +39,8 @@ ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
 }
 #: Largest error (m) that counts as reached unless the caller says otherwise.
 DEFAULT_TOLERANCE = 1e-6
+#: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
+_clock: Callable[[], float] = time.monotonic
 
 
 class PlanStatus(str, Enum):
@@ -43,11 +49,13 @@ class PlanStatus(str, Enum):
     SUCCEEDED = 'succeeded'        # reached within tolerance
     NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal
     REJECTED = 'rejected'          # refused before optimisation (bad goal or start)
+    TIMED_OUT = 'timed_out'        # ended at max_planning_time, with the best answer so far
+    CANCELLED = 'cancelled'        # ended by the caller's stop hook, with the best answer so far
 
 
 @dataclass
 class PlanResult:
-    """Outcome of ``plan``; ``joint_goal`` is None when the request was rejected."""
+    """Outcome of ``plan``; ``joint_goal`` is None only when the request was rejected."""
 
     status: PlanStatus
     message: str
@@ -107,12 +115,14 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
          seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
-         options: dict[str, Any] | None = None) -> PlanResult:
+         options: dict[str, Any] | None = None, max_planning_time: float | None = None,
+         stop: Callable[[], bool] | None = None) -> PlanResult:
     """
     Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
 
     Invalid goals and starts give a REJECTED result with the reason, never an exception;
-    invalid settings (unknown mode or algorithm, non-positive numbers) raise ValueError.
+    invalid settings (unknown mode or algorithm, non-positive numbers) raise ValueError. A search
+    ended by ``max_planning_time`` or ``stop`` is TIMED_OUT or CANCELLED, with its best answer.
 
     :param goal: tool position (x, y, z) in metres.
     :param start: all joint angles now (rad); default the upright pose q = 0.
@@ -128,14 +138,14 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param tol: convergence precision (Table 4), the stopping rule's least improvement of F.
     :param shaping: the rewards-and-punishment settings (Table 4 defaults).
     :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
+    :param max_planning_time: longest search (s, monotonic clock); None: no limit.
+    :param stop: asked once per iteration; True ends the search (e.g. on Ctrl-C).
     """
     arm = arm if arm is not None else paper_arm()
     mode = Mode(mode)
-    if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
-    if not (np.isfinite(tolerance) and tolerance > 0):
-        raise ValueError(f'tolerance must be finite and positive, got {tolerance}')
+    _check_settings(algorithm, tolerance, max_planning_time, stop)
     clock = time.perf_counter()
+    interrupt = _interrupt(max_planning_time, stop)
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
     common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega)}
@@ -144,26 +154,72 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
-                                  seed=seed, **(options or {}))
-    return _outcome(obj, found, tolerance, clock, common)
+                                  seed=seed, interrupt=interrupt, **(options or {}))
+    return _outcome(obj, found, (tolerance, max_planning_time), clock, common)
 
 
-def _outcome(obj: Objective, found: OptimizeResult, tolerance: float, clock: float,
-             common: dict[str, Any]) -> PlanResult:
+def _check_settings(algorithm: str, tolerance: float, max_planning_time: float | None,
+                    stop: Callable[[], bool] | None) -> None:
+    """Raise ValueError for an unknown algorithm or a bad tolerance or time limit."""
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise ValueError(f'tolerance must be finite and positive, got {tolerance}')
+    if max_planning_time is not None and not (np.isfinite(max_planning_time)
+                                              and max_planning_time > 0):
+        raise ValueError('max_planning_time must be None or finite and positive, '
+                         f'got {max_planning_time}')
+    if stop is not None and not callable(stop):
+        raise ValueError(f'stop must be None or a callable returning bool, got {stop!r}')
+
+
+def _interrupt(max_planning_time: float | None,
+               stop: Callable[[], bool] | None) -> Interrupt | None:
+    """
+    Return the optimiser's interrupt for a time limit from now and a stop hook (None: neither).
+
+    It asks ``stop`` first (CANCELLED), then the clock (TIMED_OUT once ``max_planning_time``
+    has passed); it does nothing else, so a search it never ends is bit-identical.
+    """
+    if max_planning_time is None and stop is None:
+        return None
+    deadline = None if max_planning_time is None else _clock() + max_planning_time
+
+    def interrupt() -> PlanStatus | None:
+        if stop is not None and stop():
+            return PlanStatus.CANCELLED
+        if deadline is not None and _clock() >= deadline:
+            return PlanStatus.TIMED_OUT
+        return None
+    return interrupt
+
+
+def _status(found: OptimizeResult, limits: tuple[float, float | None],
+            pos_err: float) -> tuple[PlanStatus, str]:
+    """Return the status of a search and its one-line reason; ``limits``: tolerance, time."""
+    tolerance, max_planning_time = limits
+    if found.interrupted == PlanStatus.TIMED_OUT:
+        return PlanStatus.TIMED_OUT, (f'planning ran past max_planning_time '
+                                      f'{max_planning_time:g} s; best position error '
+                                      f'{pos_err:.3g} m')
+    if found.interrupted == PlanStatus.CANCELLED:
+        return PlanStatus.CANCELLED, 'planning stopped before the end'
+    if found.error <= tolerance:
+        return (PlanStatus.SUCCEEDED,
+                f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m')
+    return PlanStatus.NOT_REACHED, (f'goal not reached: best error {found.error:.3g} m is above '
+                                    f'the tolerance {tolerance:.3g} m')
+
+
+def _outcome(obj: Objective, found: OptimizeResult, limits: tuple[float, float | None],
+             clock: float, common: dict[str, Any]) -> PlanResult:
     """Return the result of a search: the joint goal, its errors, the status and a message."""
     joint_goal = obj.full(found.x)[0]
     p, u = obj.arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
     radial_err = (float(abs(np.arccos(np.clip(u[0, 2], -1, 1)) - np.arccos(obj.axis_target)))
                   if obj.radial else float('nan'))
-    reached = found.error <= tolerance
-    if reached:
-        status = PlanStatus.SUCCEEDED
-        message = f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m'
-    else:
-        status = PlanStatus.NOT_REACHED
-        message = (f'goal not reached: best error {found.error:.3g} m is above the tolerance '
-                   f'{tolerance:.3g} m')
+    status, message = _status(found, limits, pos_err)
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
         radial_error_rad=radial_err, motion_time_s=found.motion_time, efficiency=found.fun,

@@ -38,6 +38,9 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
                    help='largest error in metres that counts as reached '
                         f'(default {DEFAULT_TOLERANCE})')
+    p.add_argument('--max-planning-time', type=finite_number, default=None, metavar='S',
+                   help='longest search per goal in seconds; past it the plan ends as timed_out '
+                        'with its best answer (default: no limit)')
     p.add_argument('--json', action='store_true', help='print one JSON object a line')
     p.set_defaults(run=_run_plan)
 
@@ -143,7 +146,7 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any
 def _run_plan(args: argparse.Namespace) -> int:
     arm = paper_arm()
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
-                'tolerance': args.tolerance}
+                'tolerance': args.tolerance, 'max_planning_time': args.max_planning_time}
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
