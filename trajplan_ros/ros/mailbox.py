@@ -1,38 +1,49 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The planner node's work queue: every service call in order, plus the newest topic goal.
+The planner node's work queue: every service call in arrival order, plus the newest topic goal.
 
-The executor threads put work in; the node's one worker thread takes it out. A service call's
-callback waits on the job's ``done`` event for its answer.
+The executor thread puts work in; the node's one worker thread takes it out. Calls wait in a
+bounded queue (``put_call`` refuses one beyond the bound); of the topic goals only the newest
+waits, and ``put_goal`` hands back the one it supersedes so the node can log it. ``close``
+stops intake and hands back every call still waiting, so that each can be answered. Nothing
+here imports rclpy: a call's ``future`` is whatever the node waits on.
 """
 from __future__ import annotations
 
 import collections
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+import enum
 import threading
+import time
+from typing import Any
 
-from nav_msgs.msg import Path
+
+__all__ = ['Admission', 'Job', 'Mailbox']
 
 
-__all__ = ['Job', 'Mailbox']
+class Admission(enum.Enum):
+    """What became of a service call offered to the queue."""
+
+    QUEUED = 'queued'
+    FULL = 'full'           # max_queued_calls calls are waiting already
+    CLOSED = 'closed'       # the node is shutting down
 
 
 @dataclass
 class Job:
-    """
-    One goal for the worker.
-
-    For a service call, ``done`` is set once ``path`` is final and ``answered`` once the
-    service callback has taken it.
-    """
+    """One goal for the worker; a service call carries the future its answer goes into."""
 
     label: str
     goal: tuple[float, float, float]
     tolerance: float | None = None
-    done: threading.Event | None = None
-    answered: threading.Event | None = None
-    path: Path | None = None
+    future: Any = None
+    queued_at: float = field(default_factory=time.monotonic)
+    answered: bool = False
+
+    @property
+    def is_call(self) -> bool:
+        return self.future is not None
 
 
 class Mailbox:
@@ -42,50 +53,51 @@ class Mailbox:
         self._cond = threading.Condition()
         self._calls: collections.deque[Job] = collections.deque()
         self._goal: Job | None = None
-        self._current: Job | None = None
         self.closed = False
 
-    def put_call(self, job: Job) -> bool:
-        """Queue a service call; False once closed (it will not be planned)."""
+    def put_call(self, job: Job, limit: int) -> Admission:
+        """Queue a service call unless ``limit`` calls are waiting or the queue is closed."""
         with self._cond:
             if self.closed:
-                return False
+                return Admission.CLOSED
+            if len(self._calls) >= limit:
+                return Admission.FULL
             self._calls.append(job)
             self._cond.notify()
-            return True
+            return Admission.QUEUED
 
     def put_goal(self, job: Job) -> Job | None:
-        """Queue a topic goal; return the waiting goal it replaces, if any."""
+        """Queue a topic goal; return the waiting goal it supersedes (``job`` itself if closed)."""
         with self._cond:
-            dropped, self._goal = self._goal, job
+            if self.closed:
+                return job
+            superseded, self._goal = self._goal, job
             self._cond.notify()
-            return dropped
-
-    def wait_for_work(self, timeout: float) -> None:
-        """Return when there is work (or the mailbox is closed), or after ``timeout`` seconds."""
-        with self._cond:
-            self._cond.wait_for(lambda: self.closed or self._calls or self._goal is not None,
-                                timeout=timeout)
+            return superseded
 
     def take(self) -> Job | None:
         """Block until there is work (service calls first); None once closed."""
         with self._cond:
-            self._current = None
-            while not self.closed and not self._calls and self._goal is None:
-                self._cond.wait()
+            self._cond.wait_for(lambda: self.closed or self._calls or self._goal is not None)
             if self.closed:
                 return None
             if self._calls:
-                self._current = self._calls.popleft()
-            else:
-                self._current, self._goal = self._goal, None
-            return self._current
+                return self._calls.popleft()
+            job, self._goal = self._goal, None
+            return job
+
+    def waiting(self) -> tuple[int, float]:
+        """Return how many calls wait, and how long the oldest has waited (s; 0 if none)."""
+        with self._cond:
+            oldest = time.monotonic() - self._calls[0].queued_at if self._calls else 0.0
+            return len(self._calls), oldest
 
     def close(self) -> list[Job]:
-        """Stop handing out work; return the service calls still waiting for an answer."""
+        """Stop handing out and taking work; return the calls and goal still waiting."""
         with self._cond:
             self.closed = True
             self._cond.notify_all()
-            waiting = [j for j in (self._current, *self._calls) if j is not None and j.done]
+            left = list(self._calls) + ([self._goal] if self._goal is not None else [])
             self._calls.clear()
-            return waiting
+            self._goal = None
+            return left

@@ -6,71 +6,79 @@ The ROS 2 planner node ``trajplan`` (executable ``planner_node``): a thin shell 
 Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping apply):
 
 * ``goal`` (geometry_msgs/msg/Point, m, arm base frame): plan each goal and, on success,
-  publish the trajectory. While the node is busy only the newest goal waits; older waiting
-  goals are dropped with a log line naming them.
-* ``plan_trajectory`` (nav_msgs/srv/GetPlan): plan ``request.goal.pose.position`` (tolerance
-  in m when above zero; ``request.start`` is ignored). The response's plan is the tool path of
-  the trajectory, one pose per trajectory point (empty on failure); success also publishes.
-* ``joint_trajectory`` (trajectory_msgs/msg/JointTrajectory, out): the form
-  joint_trajectory_controller accepts (header.stamp zero = start now).
+  publish the trajectory. While the node is busy only the newest goal waits; an older waiting
+  goal is logged as superseded.
+* ``plan_trajectory`` (nav_msgs/srv/GetPlan): plan ``request.goal.pose.position``. The
+  response's plan is the tool path of the trajectory, one pose per point (empty on failure).
+* ``joint_trajectory`` (out), ``planned_path`` (nav_msgs/msg/Path, out, for RViz),
+  ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
-  Without it the start is the end of the last published trajectory, else ``start_positions``.
 
-Planning runs on one daemon worker thread, so the executor keeps answering parameter
-services, goals and other service calls meanwhile, and Ctrl-C or SIGTERM ends the process
-promptly even mid-plan. A service call is answered first; the trajectory is published and the
-plan logged (with its start, result and ``plan_time_s``) just after.
+Concurrency, all of it:
+
+* One executor thread (a SingleThreadedExecutor) runs every callback. None of them blocks:
+  the service callback is a coroutine that queues its call and ``await``s the call's Future.
+* One worker thread takes jobs from the ``Mailbox`` (calls in arrival order, then the newest
+  goal), plans them, publishes, and hands each call's answer back through a deque and the
+  guard condition ``_deliver``; the guard's callback completes the Futures on the executor
+  thread. No Future is ever completed from another thread: rclpy 7.1.6 (PyPI) does not wake
+  the executor for that, later Jazzy releases do; this path works with both.
+* The main thread waits for SIGINT or SIGTERM (rclpy's own signal handling is off), then
+  ``shut_down`` stops intake, stops the running plan, answers every waiting call with an empty
+  plan, and only then the context is shut down.
+
+QoS: the service and the goal subscription keep all samples (reliable, KEEP_ALL), so no
+request or goal that reached the node's reader is overwritten before a callback sees it; the
+queue of calls is bounded by ``max_queued_calls`` instead. joint_states are taken best effort
+(matches publishers of either reliability; only the newest state matters).
 """
 from __future__ import annotations
 
+import collections
 import itertools
 import math
+import signal
 import sys
 import threading
-from typing import Any, Sequence
+from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
-import numpy as np
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos import HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory
-from trajplan_ros.planning import plan
-from trajplan_ros.ros.mailbox import Job, Mailbox
-from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros import job as jobs
+from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
+from trajplan_ros.ros.joint_states import JointStateMonitor
+from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
 
 
 __all__ = ['PlannerNode', 'main']
 
-#: Executor threads. Each service call waiting for its plan holds one, so up to this many
-#: minus one calls can wait while parameter services, goals and joint states still get answered;
-#: beyond that, calls queue in the executor (none is dropped).
-EXECUTOR_THREADS = 8
-
-#: After answering a service call, how long the worker may wait (for nothing but the answer to
-#: go out) before it publishes the trajectory and logs, unless new work arrives first.
-ANSWER_GRACE_S = 5e-3
-#: PoseStamped messages the worker makes ahead while idle, for the next service answer's path.
+#: Every request and goal that reached the node's reader is kept until a callback takes it.
+KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+#: PoseStamped messages the worker makes ahead while idle, for the next answer's path.
 BLANK_POSES = 200
-#: Python's GIL switch interval in the node process (default 5 ms): how long an executor thread
-#: may wait for the GIL while the worker computes. Shorter keeps answers prompt during plans.
+#: Python's GIL switch interval in the node process (default 5 ms): how long the executor
+#: thread may wait for the GIL while the worker computes.
 SWITCH_INTERVAL_S = 5e-4
-
-
-def _fmt(xyz: Sequence[float]) -> str:
-    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
+#: At shutdown: how long to wait for the running plan to stop and for the answers to go out.
+SHUTDOWN_STEP_S = 0.5
 
 
 def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
@@ -88,33 +96,52 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
     return descriptor
 
 
+def request_problem(request: GetPlan.Request, base_frame: str) -> str | None:
+    """Return why a GetPlan request is refused before planning, or None."""
+    tolerance = request.tolerance
+    if not math.isfinite(tolerance) or tolerance < 0:
+        return (f'tolerance {tolerance} m is not allowed: give 0 (use the tolerance parameter) '
+                'or a positive finite value')
+    frame = request.goal.header.frame_id
+    if frame and frame != base_frame:
+        return (f"the goal is in frame '{frame}', but this node plans in base_frame "
+                f"'{base_frame}' (it does no frame transforms)")
+    return None
+
+
 class PlannerNode(Node):
     """Node ``trajplan``: goals and GetPlan calls in, JointTrajectory out."""
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('trajplan', **kwargs)
-        self._parameter_names: list[str] = []
-        self._declare_parameters()
+        for spec in PARAMETERS:
+            self.declare_parameter(spec.name, spec.default, _descriptor(spec))
         self._settings = Settings.from_parameters(self._parameter_values())
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
-        self._state_lock = threading.Lock()
-        self._measured: dict[str, float] = {}     # from joint_states
-        self._last_end: dict[str, float] = {}     # end of the last published trajectory
-        self._goal_ids = itertools.count(1)
-        self._call_ids = itertools.count(1)
+        self._goal_ids, self._call_ids = itertools.count(1), itertools.count(1)
         self._mailbox = Mailbox()
-        self._blanks: list[PoseStamped] = []     # worker thread only
+        self._counters = Counters()
+        self._states = JointStateMonitor(self.get_logger().warning)
+        self._stopping = threading.Event()
+        self._answer_lock = threading.Lock()
+        self._finished: collections.deque[tuple[Job, Path | None]] = collections.deque()
+        self._blanks: list[PoseStamped] = []                   # worker thread only
+        self._current: Job | None = None                        # the job being planned
+        self._flushed = threading.Event()
 
-        self._publisher = self.create_publisher(JointTrajectory, 'joint_trajectory', 10)
-        # a deep queue: every goal must reach _on_goal to be planned or logged as dropped
-        self.create_subscription(Point, 'goal', self._on_goal, 100)
-        # best effort: matches joint_states publishers of either reliability
+        self._deliver = self.create_guard_condition(self._deliver_answers)
+        self._flush = self.create_guard_condition(self._flushed.set)
+        self._trajectories = self.create_publisher(JointTrajectory, 'joint_trajectory', 10)
+        self._paths = self.create_publisher(Path, 'planned_path', 10)
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(Point, 'goal', self._on_goal, KEEP_ALL)
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
                                  qos_profile_sensor_data)
-        self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call,
+        self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
                             callback_group=ReentrantCallbackGroup())
+        self.create_timer(1.0, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
         arm = self._settings.arm
@@ -124,13 +151,8 @@ class PlannerNode(Node):
 
     # --- parameters -------------------------------------------------------------------------
 
-    def _declare_parameters(self) -> None:
-        for spec in PARAMETERS:
-            self.declare_parameter(spec.name, spec.default, _descriptor(spec))
-            self._parameter_names.append(spec.name)
-
     def _parameter_values(self) -> dict[str, Any]:
-        return {p.name: p.value for p in self.get_parameters(self._parameter_names)}
+        return {p.name: p.value for p in self.get_parameters([s.name for s in PARAMETERS])}
 
     def _check_parameters(self, params: list[Parameter]) -> SetParametersResult:
         values = self._parameter_values()
@@ -146,157 +168,182 @@ class PlannerNode(Node):
         self.get_logger().info('parameters set for the next plan: ' +
                                ', '.join(f'{p.name}={p.value}' for p in params))
 
-    # --- inputs -----------------------------------------------------------------------------
+    # --- inputs (executor thread) -----------------------------------------------------------
 
     def _on_goal(self, msg: Point) -> None:
+        self._counters.add('goals_received')
         job = Job(f'goal #{next(self._goal_ids)}', (msg.x, msg.y, msg.z))
-        dropped = self._mailbox.put_goal(job)
-        if dropped is not None:
-            self.get_logger().info(f'dropped {dropped.label} {_fmt(dropped.goal)} m: '
-                                   f'superseded by {job.label} while planning')
+        self.get_logger().debug(f'queued {job.label} {jobs.describe_goal(job.goal)} m')
+        superseded = self._mailbox.put_goal(job)
+        if superseded is job:
+            self._unplanned(job)
+        elif superseded is not None:
+            self._counters.add('goals_superseded')
+            self.get_logger().info(
+                f'superseded {superseded.label} {jobs.describe_goal(superseded.goal)} m: '
+                f'{job.label} arrived while planning')
 
     def _on_joint_states(self, msg: JointState) -> None:
-        if not msg.position:
-            return
-        if len(msg.position) != len(msg.name):
-            self.get_logger().warning(
-                f'ignored joint_states: {len(msg.name)} names but {len(msg.position)} positions',
-                throttle_duration_sec=5.0)
-            return
-        ours = set(self._settings.arm.joint_names)
-        update = {n: float(q) for n, q in zip(msg.name, msg.position) if n in ours}
-        bad = [n for n, q in update.items() if not math.isfinite(q)]
-        if bad:
-            self.get_logger().warning(
-                f"ignored joint_states: non-finite position for {', '.join(bad)}",
-                throttle_duration_sec=5.0)
-            return
-        with self._state_lock:
-            self._measured.update(update)
+        self._states.update(msg.name, msg.position, self._settings.arm.joint_names)
 
-    def _on_plan_call(self, request: GetPlan.Request,
-                      response: GetPlan.Response) -> GetPlan.Response:
+    async def _on_plan_call(self, request: GetPlan.Request,
+                            response: GetPlan.Response) -> GetPlan.Response:
+        self._counters.add('calls_received')
+        s = self._settings
         p = request.goal.pose.position
         job = Job(f'service call #{next(self._call_ids)}', (p.x, p.y, p.z),
-                  tolerance=request.tolerance if request.tolerance > 0 else None,
-                  done=threading.Event(), answered=threading.Event())
-        if self._mailbox.put_call(job):
-            job.done.wait()
-        response.plan = job.path if job.path is not None else Path(
-            header=self._header(self._settings.base_frame))
-        job.answered.set()
+                  tolerance=request.tolerance or None, future=Future())
+        response.plan = Path(header=self._header(s.base_frame))
+        problem = request_problem(request, s.base_frame)
+        admission = Admission.CLOSED if problem else self._mailbox.put_call(
+            job, s.max_queued_calls)
+        if admission is Admission.QUEUED:
+            path = await job.future
+            if path is not None:
+                response.plan = path
+        elif admission is Admission.FULL:
+            self._refused(job, f'{s.max_queued_calls} calls are waiting already '
+                               '(max_queued_calls)')
+        elif problem:
+            self._refused(job, problem)
+        else:
+            self._unplanned(job)
+        self._counters.add('calls_answered')
         return response
 
-    # --- planning (worker thread) -----------------------------------------------------------
+    def _refused(self, job: Job, reason: str) -> None:
+        self.get_logger().warning(
+            f'{job.label} {jobs.describe_goal(job.goal)} m: refused: {reason}')
+
+    def _unplanned(self, job: Job) -> None:
+        if not job.is_call:
+            self._counters.add('goals_failed')
+        self.get_logger().info(
+            f'{job.label} {jobs.describe_goal(job.goal)} m: unplanned: shutting down')
+
+    # --- planning (worker thread) and answers (executor thread) -----------------------------
 
     def _header(self, frame_id: str) -> Header:
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=frame_id)
 
-    def _start(self, settings: Settings) -> np.ndarray:
-        """Return, per joint, joint_states, else the last trajectory's end, else the parameter."""
-        with self._state_lock:
-            known = {**self._last_end, **self._measured}
-        names = settings.arm.joint_names
-        return np.array([known.get(n, q) for n, q in zip(names, settings.start)])
-
     def _work(self) -> None:
         while True:
-            # make the next answer's poses while idle (a service answer waits on their making)
             self._blanks.extend(PoseStamped() for _ in range(BLANK_POSES - len(self._blanks)))
             if (job := self._mailbox.take()) is None:
                 return
-            try:
-                self._plan(job)
-            except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
-                self.get_logger().error(
-                    f'{job.label} {_fmt(job.goal)} m: planning failed: {exc!r}')
-            finally:
-                self._answer(job)
+            self._current = job
+            path = self._plan(job)
+            if job.is_call:
+                self._answer(job, path)
 
-    @staticmethod
-    def _answer(job: Job, path: Path | None = None) -> None:
-        """
-        Hand a service call its path (None: an empty plan) once.
-
-        Then wait until the service callback has taken it, so the answer goes out before this
-        thread carries on.
-        """
-        if job.done is not None and not job.done.is_set():
-            job.path = path
-            job.done.set()
-            job.answered.wait(timeout=1.0)
-
-    def _plan(self, job: Job) -> None:
-        """Plan one job; on success answer the call (if any) with the tool path, then publish."""
+    def _plan(self, job: Job) -> Path | None:
+        """Plan one job, publish and log it; return the tool path of a success, else None."""
         s = self._settings
-        start = self._start(s)
-        where = f'{job.label} {_fmt(job.goal)} m from q = {_fmt(start)} rad'
-        self.get_logger().debug(f'planning {where}')
-        result = plan(job.goal, start, arm=s.arm, mode=s.mode, algorithm=s.algorithm,
-                      omega=s.omega, tolerance=job.tolerance or s.tolerance, seed=s.seed,
-                      population=s.population, max_iter=s.max_iter)
-        took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
-        if not result.success:
-            self._answer(job)
-            optimised = f'; {took}' if result.joint_goal is not None else ''
-            self.get_logger().warning(
-                f'{where}: {result.status.value}: {result.message}{optimised}')
-            return
-        traj = result.trajectory(s.arm, s.sample_period)
-        if job.done is not None:
-            self._answer(job, path_msg(s.arm, traj, self._header(s.base_frame), self._blanks))
-            # the executor thread still has to send the answer; publishing now would compete
-            # with it for the interpreter lock, so give it a moment unless more work is waiting
-            self._mailbox.wait_for_work(ANSWER_GRACE_S)
-        if self._mailbox.closed:
-            return
-        self._publisher.publish(trajectory_msg(traj))
-        with self._state_lock:
-            self._last_end = dict(zip(traj.joint_names, traj.positions[-1].tolist()))
-        self.get_logger().info(f'{where}: {result.message}; {took}; published {len(traj.times)} '
-                               f'points over {traj.duration:.3f} s')
+        start = self._states.start(s.arm.joint_names, s.start)
+        self.get_logger().debug(f'planning {job.label} {jobs.describe_goal(job.goal)} m')
+        try:
+            outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
+                               self._blanks)
+        except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
+            outcome = jobs.Outcome(False, f'{job.label} {jobs.describe_goal(job.goal)} m: '
+                                          f'planning failed: {exc!r}')
+            self.get_logger().error(outcome.log)
+        if outcome.plan_time_s is not None:
+            self._counters.plan_time(outcome.plan_time_s)
+        if self._stopping.is_set():
+            self._unplanned(job)
+            return None
+        if not outcome.succeeded:
+            if not job.is_call:
+                self._counters.add('goals_failed')
+            self.get_logger().warning(outcome.log)
+            return None
+        self._trajectories.publish(outcome.trajectory)
+        self._paths.publish(outcome.path)
+        self._states.trajectory_ended(*outcome.end)
+        if not job.is_call:
+            self._counters.add('goals_planned')
+        self.get_logger().info(outcome.log)
+        return outcome.path
 
-    def destroy_node(self) -> None:
-        """
-        Answer the service calls still waiting with an empty plan, then destroy the node.
+    def _answer(self, job: Job, path: Path | None) -> None:
+        """Hand a call its answer (once), for the executor thread to complete its Future."""
+        with self._answer_lock:
+            if job.answered:
+                return
+            job.answered = True
+            self._finished.append((job, path))
+        self._deliver.trigger()
 
-        A plan in progress cannot be interrupted: the daemon worker thread ends with the process.
-        """
-        waiting = self._mailbox.close()
-        for job in waiting:
-            if self.context.ok():     # after Ctrl-C or SIGTERM, /rosout is gone already
-                self.get_logger().info(f'shutting down: {job.label} {_fmt(job.goal)} m unplanned')
-            job.done.set()
-        for job in waiting:           # let the executor threads send those answers first
-            job.answered.wait(timeout=1.0)
-        super().destroy_node()
+    def _deliver_answers(self) -> None:
+        while self._finished:
+            job, path = self._finished.popleft()
+            job.future.set_result(path)
+
+    def _publish_diagnostics(self) -> None:
+        waiting, oldest = self._mailbox.waiting()
+        self._diagnostics.publish(diagnostic_array(
+            self.get_fully_qualified_name(), self._header(''), self._counters.snapshot(),
+            waiting, oldest, self._counters.superseded_since_last_report(),
+            self._states.counts()))
+
+    # --- shutdown (main thread) -------------------------------------------------------------
+
+    def shut_down(self) -> None:
+        """Stop intake and the running plan, answer every waiting call with an empty plan."""
+        self._stopping.set()
+        for job in self._mailbox.close():
+            self._unplanned(job)
+            if job.is_call:
+                self._answer(job, None)
+        self._worker.join(timeout=SHUTDOWN_STEP_S)       # the running plan stops at its next check
+        current = self._current
+        if self._worker.is_alive() and current is not None and current.is_call:
+            self._unplanned(current)                     # still in one long iteration
+            self._answer(current, None)
+        answered = threading.Event()
+        for _ in range(int(SHUTDOWN_STEP_S / 0.01)):     # the answers go out on the executor
+            snapshot = self._counters.snapshot()
+            if snapshot['calls_answered'] >= snapshot['calls_received']:
+                break
+            answered.wait(0.01)
+        self._flushed.clear()
+        self._flush.trigger()                            # one more turn: the last send is done
+        self._flushed.wait(SHUTDOWN_STEP_S)
+
+
+def _spin(executor: SingleThreadedExecutor) -> None:
+    try:
+        executor.spin()
+    except ExternalShutdownException:
+        pass
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the node until Ctrl-C or SIGTERM (rclpy handles both)."""
+    """Run the node until SIGINT or SIGTERM, then shut down without losing a call."""
     sys.setswitchinterval(SWITCH_INTERVAL_S)
-    rclpy.init(args=args)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
     try:
         node = PlannerNode()
     except (ValueError, ParameterException) as exc:
         get_logger('trajplan').fatal(f'invalid parameters: {exc}')
         rclpy.try_shutdown()
         return 2
-    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
+    executor = SingleThreadedExecutor()
     executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
+    spinner = threading.Thread(target=_spin, args=(executor,), name='trajplan_executor',
+                               daemon=True)
+    spinner.start()
+    while spinner.is_alive() and not stop.wait(0.5):
         pass
-    except RuntimeError:
-        # the signal handler may shut the context down while the executor builds its wait
-        # set (ros2/rclpy#398): that is the shutdown we asked for; anything else is not
-        if rclpy.ok():
-            raise
-    finally:
-        node.destroy_node()
-        executor.shutdown()
-        rclpy.try_shutdown()
+    node.shut_down()
+    executor.shutdown(timeout_sec=SHUTDOWN_STEP_S)
+    spinner.join(timeout=SHUTDOWN_STEP_S)
+    node.destroy_node()
+    rclpy.try_shutdown()
     return 0
 
 

@@ -76,6 +76,15 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('base_frame', 'base_link', 'frame_id of the returned tool path'),
     ParameterSpec('sample_period', 0.1, 'time between trajectory points, s',
                   bounds=(1e-3, 10.0)),
+    ParameterSpec('max_planning_time', 1.0,
+                  'longest a plan may search, s; past it the plan ends as timed_out',
+                  bounds=(1e-3, 60.0)),
+    ParameterSpec('max_trajectory_points', 10000,
+                  'most points a published trajectory may have; a plan needing more is refused',
+                  bounds=(2, 50000)),
+    ParameterSpec('max_queued_calls', 1000,
+                  'most service calls that may wait for a plan; more are answered at once with '
+                  'an empty plan', bounds=(1, 100000)),
 )
 
 
@@ -99,6 +108,9 @@ class Settings:
     base_frame: str
     sample_period: float
     start: np.ndarray
+    max_planning_time: float
+    max_trajectory_points: int
+    max_queued_calls: int
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> Settings:
@@ -122,4 +134,7 @@ class Settings:
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
                    tolerance=values['tolerance'], base_frame=values['base_frame'],
-                   sample_period=values['sample_period'], start=start)
+                   sample_period=values['sample_period'], start=start,
+                   max_planning_time=values['max_planning_time'],
+                   max_trajectory_points=values['max_trajectory_points'],
+                   max_queued_calls=values['max_queued_calls'])

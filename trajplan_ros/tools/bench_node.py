@@ -44,7 +44,7 @@ from rcl_interfaces.srv import GetParameters
 from rclpy.utilities import get_rmw_implementation_identifier
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.planner import plan
-from trajplan_ros.tools.node_process import PlannerProcess, ros_environment
+from trajplan_ros.tools.node_process import describe_goal, PlannerProcess, ros_environment
 from trajplan_ros.tools.ros_client import RosClient
 
 
@@ -57,11 +57,6 @@ MAX_PARAMETER_LATENCY_S = 0.1
 TIMEOUT_S = 120.0
 
 
-def _fmt(xyz: Sequence[float]) -> str:
-    """Write a point as the node does in its log lines."""
-    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
-
-
 def _goals(count: int, seed: int) -> np.ndarray:
     """Tool positions of seeded random configurations inside the paper arm's limits."""
     arm = paper_arm()
@@ -69,7 +64,7 @@ def _goals(count: int, seed: int) -> np.ndarray:
     q = rng.uniform(arm.lower, arm.upper, size=(count, arm.n_joints))
     q[:, arm.planned:] = 0.0
     goals = np.round(arm.tool(q)[0], 5)                   # 5 decimals: unique 6-digit log text
-    if len({_fmt(g) for g in goals}) != count:
+    if len({describe_goal(g) for g in goals}) != count:
         raise RuntimeError("goals collide in the node's log format; pick another --seed")
     return goals
 
@@ -126,14 +121,15 @@ def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
         request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
         answer, trip = _timed_call(ros, client, request)
         if answer is None:
-            return f'no answer within {TIMEOUT_S:.0f} s for goal {_fmt(goal)}'
+            return f'no answer within {TIMEOUT_S:.0f} s for goal {describe_goal(goal)}'
         trips.append(trip)
         sizes.append(len(answer.plan.poses))
         if idle or i == len(goals) - 1:
-            node.wait_for(rf'service call #\d+ {re.escape(_fmt(goal))} m from ', timeout=TIMEOUT_S)
+            logged = rf'service call #\d+ {re.escape(describe_goal(goal))} m from '
+            node.wait_for(logged, timeout=TIMEOUT_S)
     logged = {m.group(1): float(m.group(2)) / 1e3 for m in node.matches(
         r'service call #\d+ (\([^)]*\)) m from .*; planned in ([0-9.]+) ms')}
-    return trips, [logged[_fmt(g)] for g in goals], sizes
+    return trips, [logged[describe_goal(g)] for g in goals], sizes
 
 
 def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
@@ -177,7 +173,8 @@ def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
 
 def _missing(goals: np.ndarray, settled: dict[str, str]) -> str:
     """List the goals (numbered from 1 in sending order) neither planned nor dropped."""
-    lost = [f'#{i} {_fmt(g)}' for i, g in enumerate(goals, 1) if _fmt(g) not in settled]
+    lost = [f'#{i} {describe_goal(g)}' for i, g in enumerate(goals, 1)
+            if describe_goal(g) not in settled]
     return f" ({', '.join(lost[:5])}{', ...' if len(lost) > 5 else ''})" if lost else ''
 
 
@@ -199,13 +196,13 @@ def _warm_up(node: PlannerProcess, ros: RosClient, publisher: Any, params: Any) 
 
 def _settle(node: PlannerProcess, goals: np.ndarray) -> dict[str, str]:
     """Wait until every goal is logged as planned or dropped (or time out): how each went."""
-    wanted = {_fmt(g) for g in goals}
+    wanted = {describe_goal(g) for g in goals}
     settled: dict[str, str] = {}
 
     def accounted() -> bool:
         for m in node.matches(r'\]: goal #\d+ (\([^)]*\)) m from '):
             settled.setdefault(m.group(1), 'planned')
-        for m in node.matches(r'\]: dropped goal #\d+ (\([^)]*\)) m: '):
+        for m in node.matches(r'\]: superseded goal #\d+ (\([^)]*\)) m: '):
             settled.setdefault(m.group(1), 'dropped')
         return wanted <= settled.keys()
 
@@ -218,7 +215,7 @@ def _settle(node: PlannerProcess, goals: np.ndarray) -> dict[str, str]:
 def _stream_report(node: PlannerProcess, goals: np.ndarray, settled: dict[str, str],
                    latencies: list[float], rate: float, sent: float) -> tuple[bool, list[str]]:
     """Judge the goal stream: every goal accounted for, every parameter get prompt."""
-    wanted = {_fmt(g) for g in goals}
+    wanted = {describe_goal(g) for g in goals}
     planned = sum(1 for g in wanted if settled.get(g) == 'planned')
     dropped = sum(1 for g in wanted if settled.get(g) == 'dropped')
     missing = len(wanted) - planned - dropped

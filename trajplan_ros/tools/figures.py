@@ -27,13 +27,13 @@ import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
-
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import PlanResult
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import METHODS
 from trajplan_ros.tools.bench.runner import run
+
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -20,10 +20,16 @@ import time
 from typing import Callable, Mapping, Sequence
 
 
-__all__ = ['TIMEOUT_S', 'PlannerProcess', 'planner_command', 'ros_environment', 'wait_until']
+__all__ = ['TIMEOUT_S', 'PlannerProcess', 'describe_goal', 'planner_command', 'ros_environment',
+           'wait_until']
 
 #: Liveness bound (s) for anything a client waits on by default: discovery, an answer.
 TIMEOUT_S = 60.0
+
+
+def describe_goal(xyz: Sequence[float]) -> str:
+    """Write a point as the node's log lines do (6 significant digits)."""
+    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
 
 
 def wait_until(predicate: Callable[[], bool], timeout: float = TIMEOUT_S,

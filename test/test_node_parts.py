@@ -1,0 +1,158 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's parts without DDS: work queue, joint_states checks, request checks, diagnostics."""
+import math
+import threading
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from nav_msgs.srv import GetPlan
+import pytest
+from std_msgs.msg import Header
+from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
+from trajplan_ros.ros.joint_states import JointStateMonitor
+from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
+from trajplan_ros.ros.node import request_problem
+
+
+ARM = ('joint1', 'joint2', 'joint3')
+
+
+def call(n: int) -> Job:
+    return Job(f'service call #{n}', (0.1 * n, 0.0, 0.0), future=object())
+
+
+def goal(n: int) -> Job:
+    return Job(f'goal #{n}', (0.0, 0.1 * n, 0.0))
+
+
+def test_calls_come_out_in_arrival_order_before_the_newest_goal() -> None:
+    box = Mailbox()
+    assert box.put_goal(goal(1)) is None
+    superseded = box.put_goal(goal(2))
+    assert superseded.label == 'goal #1'
+    for n in range(1, 4):
+        assert box.put_call(call(n), limit=10) is Admission.QUEUED
+    assert [box.take().label for _ in range(4)] == [
+        'service call #1', 'service call #2', 'service call #3', 'goal #2']
+
+
+def test_calls_beyond_the_limit_are_refused_and_close_hands_back_the_rest() -> None:
+    box = Mailbox()
+    assert [box.put_call(call(n), limit=2) for n in range(1, 4)] == [
+        Admission.QUEUED, Admission.QUEUED, Admission.FULL]
+    box.put_goal(goal(1))
+    assert box.waiting()[0] == 2
+    left = box.close()
+    assert [j.label for j in left] == ['service call #1', 'service call #2', 'goal #1']
+    assert box.put_call(call(4), limit=2) is Admission.CLOSED
+    late = goal(2)
+    assert box.put_goal(late) is late                     # closed: handed straight back
+    assert box.take() is None
+
+
+def test_take_blocks_until_work_or_close() -> None:
+    box = Mailbox()
+    taken: list[object] = []
+    worker = threading.Thread(target=lambda: taken.append(box.take()))
+    worker.start()
+    box.put_call(call(1), limit=1)
+    worker.join(timeout=10)
+    assert [j.label for j in taken] == ['service call #1']
+    worker = threading.Thread(target=lambda: taken.append(box.take()))
+    worker.start()
+    box.close()
+    worker.join(timeout=10)
+    assert taken[-1] is None
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.mark.parametrize('names, positions, kind, text', [
+    (['joint1', 'joint2'], [0.0], 'length mismatch', '2 names but 1 positions'),
+    (['joint1', 'joint1'], [0.0, 0.1], 'duplicate name', 'duplicate name joint1'),
+    (['joint1', 'joint2'], [0.0, math.nan], 'non-finite position',
+     'non-finite position for joint2'),
+    (['Joint1', 'Joint2'], [0.0, 0.1], 'no arm joint',
+     "names none of the arm's joints: got Joint1, Joint2; expected joint1, joint2, joint3"),
+])
+def test_each_problem_is_logged_at_once_then_counted(names, positions, kind, text) -> None:
+    logged: list[str] = []
+    clock = FakeClock()
+    monitor = JointStateMonitor(logged.append, repeat_period=5.0, clock=clock)
+    monitor.update(['joint1'], [0.5], ARM)
+    for _ in range(4):                                   # the first now, three repeats
+        monitor.update(names, positions, ARM)
+        clock.now += 1.0
+    assert logged == [f'ignored joint_states: {text}']
+    clock.now = 6.0
+    monitor.update(names, positions, ARM)                # the period is over: a summary
+    assert logged[1] == f'ignored joint_states: {text} (again, 4 times in the last 6 s)'
+    assert monitor.counts()[kind] == 5
+    assert sum(monitor.counts().values()) == 5
+    # nothing of a bad message was taken
+    start = monitor.start(ARM, [0.0, 0.0, 0.0])
+    assert start.q.tolist() == [0.5, 0.0, 0.0]
+
+
+def test_the_start_says_where_each_joint_came_from() -> None:
+    monitor = JointStateMonitor(lambda _: None)
+    start = monitor.start(ARM, [0.1, 0.2, 0.3])
+    assert start.q.tolist() == [0.1, 0.2, 0.3]
+    assert start.describe() == ''                        # one source: nothing to say
+    monitor.trajectory_ended(ARM, [1.0, 2.0, 3.0])
+    monitor.update(['other_robot_joint', 'joint2'], [9.0, -2.0], ARM)
+    start = monitor.start(ARM, [0.1, 0.2, 0.3])
+    assert start.q.tolist() == [1.0, -2.0, 3.0]
+    assert start.describe() == ' [joint1, joint3 from trajectory end; joint2 from joint_states]'
+
+
+def request(tolerance: float, frame: str = '') -> GetPlan.Request:
+    r = GetPlan.Request(tolerance=tolerance)
+    r.goal.header.frame_id = frame
+    return r
+
+
+@pytest.mark.parametrize('tolerance', [-1.0, math.inf, math.nan])
+def test_bad_tolerances_are_refused(tolerance) -> None:
+    assert 'is not allowed' in request_problem(request(tolerance), 'base_link')
+
+
+def test_zero_and_positive_tolerances_and_our_frame_pass() -> None:
+    for r in (request(0.0), request(1e-3, 'base_link'), request(0.0, '')):
+        assert request_problem(r, 'base_link') is None
+
+
+def test_a_goal_in_another_frame_is_refused() -> None:
+    reason = request_problem(request(0.0, 'map'), 'base_link')
+    assert "frame 'map'" in reason and "base_frame 'base_link'" in reason
+
+
+def test_diagnostics_warn_on_slow_calls_and_superseded_goals() -> None:
+    counters = Counters()
+    for name, n in (('goals_received', 5), ('goals_planned', 3), ('goals_superseded', 2),
+                    ('calls_received', 4), ('calls_answered', 4)):
+        counters.add(name, n)
+    counters.plan_time(0.01)
+    problems = {'length mismatch': 1, 'non-finite position': 0}
+
+    def status(waiting: int, oldest: float) -> DiagnosticStatus:
+        array = diagnostic_array('/trajplan', Header(), counters.snapshot(), waiting, oldest,
+                                 counters.superseded_since_last_report(), problems)
+        return array.status[0]
+
+    first = status(0, 0.0)
+    assert first.level == DiagnosticStatus.WARN and '2 goal(s) superseded' in first.message
+    values = {kv.key: kv.value for kv in first.values}
+    assert values['goals_received'] == '5' and values['goals_superseded'] == '2'
+    assert values['joint_states length mismatch'] == '1'
+    assert values['last_plan_time_s'] == '0.01'
+    assert status(0, 0.0).level == DiagnosticStatus.OK   # nothing superseded since
+    slow = status(3, 1.5)
+    assert slow.level == DiagnosticStatus.WARN and 'waited 1.5 s' in slow.message
+    assert {kv.key: kv.value for kv in slow.values}['calls_waiting'] == '3'

@@ -1,0 +1,74 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+One job of the planner node's worker: plan a goal and turn the result into messages.
+
+Pure translation between the planning core and ROS messages, no node: the worker thread calls
+``run`` and then answers, publishes and logs what it returns.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
+from std_msgs.msg import Header
+from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros.planning import plan, PlanResult, trajectory_points
+from trajplan_ros.ros.joint_states import PlanStart
+from trajplan_ros.ros.mailbox import Job
+from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros.settings import Settings
+
+
+__all__ = ['Outcome', 'describe_goal', 'run']
+
+
+def describe_goal(xyz: Sequence[float]) -> str:
+    """Write a point as the node's log lines do."""
+    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
+
+
+@dataclass
+class Outcome:
+    """What a job came to: the messages to send (on success) and the log line."""
+
+    succeeded: bool
+    log: str
+    path: Path | None = None
+    trajectory: JointTrajectory | None = None
+    end: tuple[Sequence[str], Sequence[float]] | None = None    # joint names, final angles
+    plan_time_s: float | None = None
+
+
+def _refusal(where: str, result: PlanResult, took: str) -> str:
+    optimised = f'; {took}' if result.joint_goal is not None else ''
+    return f'{where}: {result.status.value}: {result.message}{optimised}'
+
+
+def run(job: Job, settings: Settings, start: PlanStart, header: Header,
+        stop: Callable[[], bool], blanks: list[PoseStamped] | None = None) -> Outcome:
+    """Plan ``job`` from ``start``; on success build its trajectory and tool path messages."""
+    s = settings
+    where = (f'{job.label} {describe_goal(job.goal)} m from q = {describe_goal(start.q)} rad'
+             f'{start.describe()}')
+    result = plan(job.goal, start.q, arm=s.arm, mode=s.mode, algorithm=s.algorithm,
+                  omega=s.omega, tolerance=job.tolerance or s.tolerance, seed=s.seed,
+                  population=s.population, max_iter=s.max_iter,
+                  max_planning_time=s.max_planning_time, stop=stop)
+    took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
+    timed = result.plan_time_s if result.joint_goal is not None else None
+    if not result.success:
+        return Outcome(False, _refusal(where, result, took), plan_time_s=timed)
+    points = trajectory_points(result.start, result.joint_goal, s.omega, s.sample_period)
+    if points > s.max_trajectory_points:
+        return Outcome(False, f'{where}: refused: the trajectory would need {points} points, '
+                              f'more than max_trajectory_points {s.max_trajectory_points} '
+                              f'(motion {result.motion_time_s:.3f} s at sample_period '
+                              f'{s.sample_period:g} s); {took}', plan_time_s=timed)
+    traj = result.trajectory(s.arm, s.sample_period)
+    return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
+                         f'points over {traj.duration:.3f} s',
+                   path=path_msg(s.arm, traj, header, blanks), trajectory=trajectory_msg(traj),
+                   end=(traj.joint_names, traj.positions[-1].tolist()), plan_time_s=timed)
