@@ -164,17 +164,40 @@ def flood(env: dict[str, str], count: int, rate: float) -> Result:
         seconds = time.perf_counter() - began
         publisher.wait_for_all_acked(Duration(seconds=TIMEOUT_S))
         settled = _settle(node, sent)
+        counted = _diagnosed_goals(ros, count)
     finally:
         ros.close()
         latency_met, latency = poller.finish()
         node.stop()
     kinds = {k: list(settled.values()).count(k) for k in ('planned', 'superseded', 'failed')}
     accounted = sum(kinds.values())
-    met = accounted == count and latency_met
+    met = accounted == count and counted and latency_met
     return met, [f'flood: {count} goals at {rate:g} Hz (sent in {seconds:.2f} s): '
-                 f"{accounted} accounted for ({kinds['planned']} planned, "
-                 f"{kinds['superseded']} superseded, {kinds['failed']} failed): "
-                 f'{_verdict(accounted == count)}', '  ' + latency]
+                 f"{accounted} accounted for in the log ({kinds['planned']} planned, "
+                 f"{kinds['superseded']} superseded, {kinds['failed']} failed), "
+                 f"{'and in diagnostics' if counted else 'NOT in diagnostics'}: "
+                 f'{_verdict(accounted == count and counted)}', '  ' + latency]
+
+
+def _diagnosed_goals(ros: RosClient, count: int) -> bool:
+    """Wait until diagnostics say received = planned + superseded + failed = ``count``."""
+    box = ros.inbox(DiagnosticArray, '/diagnostics')
+
+    def balanced() -> bool:
+        while not box.empty():
+            for status in box.get().status:
+                v = {kv.key: kv.value for kv in status.values}
+                ends = ('goals_planned', 'goals_superseded', 'goals_failed')
+                if v.get('goals_received') == str(count) and sum(
+                        int(v[k]) for k in ends) == count:
+                    return True
+        return False
+
+    try:
+        wait_until(balanced, TIMEOUT_S, 'diagnostics accounting for every goal')
+    except TimeoutError:
+        return False
+    return True
 
 
 def _settle(node: PlannerProcess, sent: list[tuple[float, float, float]]) -> dict[str, str]:
