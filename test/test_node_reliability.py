@@ -183,7 +183,8 @@ def test_joint_states_problems_are_reported_and_the_start_names_its_sources(
         states.publish(partial)
         mark = lone_node.mark()
         peer.call(GetPlan, f'{ns}/plan_trajectory', plan_request(probe))
-        return lone_node.has(r'joint2 from joint_states', mark)
+        logged = lone_node.wait_for(r'service call #\d+ \(nan, 0, 0\) m from .*: rejected', mark)
+        return 'joint2 from joint_states' in logged.string
 
     wait_until(arrived, what='the partial joint state')
     assert lone_node.has(r'rad \[joint1, joint3, joint4, joint5 from start_positions; joint2 '

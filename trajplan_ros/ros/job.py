@@ -1,7 +1,7 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-One job of the planner node's worker: plan a goal and turn the result into messages.
+One job of the planner node's worker: plan a goal, and for a call build the answer's path.
 
 Pure translation between the planning core and ROS messages, no node: the worker thread calls
 ``run`` and then answers, publishes and logs what it returns.
@@ -14,11 +14,10 @@ from typing import Callable, Sequence
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from std_msgs.msg import Header
-from trajectory_msgs.msg import JointTrajectory
-from trajplan_ros.planning import plan, PlanResult, trajectory_points
+from trajplan_ros.planning import plan, PlanResult, Trajectory, trajectory_points
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
-from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
@@ -36,10 +35,11 @@ class Outcome:
 
     succeeded: bool
     log: str
-    path: Path | None = None
-    trajectory: JointTrajectory | None = None
-    end: tuple[Sequence[str], Sequence[float]] | None = None    # joint names, final angles
+    path: Path | None = None                 # built at once for a call: it is the answer
+    trajectory: Trajectory | None = None     # converted when published, after the answer
+    settings: Settings | None = None         # the settings it was planned with
     plan_time_s: float | None = None
+    error: bool = False                      # a fault of ours, not of the goal
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -68,7 +68,7 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                               f'(motion {result.motion_time_s:.3f} s at sample_period '
                               f'{s.sample_period:g} s); {took}', plan_time_s=timed)
     traj = result.trajectory(s.arm, s.sample_period)
+    path = path_msg(s.arm, traj, header, blanks) if job.is_call else None
     return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
                          f'points over {traj.duration:.3f} s',
-                   path=path_msg(s.arm, traj, header, blanks), trajectory=trajectory_msg(traj),
-                   end=(traj.joint_names, traj.positions[-1].tolist()), plan_time_s=timed)
+                   path=path, trajectory=traj, settings=s, plan_time_s=timed)

@@ -40,6 +40,7 @@ class Job:
     future: Any = None
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
+    taken: threading.Event = field(default_factory=threading.Event)   # the answer is taken
 
     @property
     def is_call(self) -> bool:
@@ -85,6 +86,12 @@ class Mailbox:
                 return self._calls.popleft()
             job, self._goal = self._goal, None
             return job
+
+    def wait_for_work(self, timeout: float) -> None:
+        """Return when there is work (or the queue is closed), or after ``timeout`` s."""
+        with self._cond:
+            self._cond.wait_for(lambda: self.closed or self._calls or self._goal is not None,
+                                timeout=timeout)
 
     def waiting(self) -> tuple[int, float]:
         """Return how many calls wait, and how long the oldest has waited (s; 0 if none)."""

@@ -65,6 +65,7 @@ from trajplan_ros.ros import job as jobs
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
+from trajplan_ros.ros.messages import path_msg, trajectory_msg
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
 
 
@@ -72,6 +73,9 @@ __all__ = ['PlannerNode', 'main']
 
 #: Every request and goal that reached the node's reader is kept until a callback takes it.
 KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+#: After handing over a call's answer, how long the worker may wait (for nothing but the answer
+#: to go out) before it publishes the trajectory and logs, unless new work arrives first.
+ANSWER_GRACE_S = 5e-3
 #: PoseStamped messages the worker makes ahead while idle, for the next answer's path.
 BLANK_POSES = 200
 #: Python's GIL switch interval in the node process (default 5 ms): how long the executor
@@ -199,6 +203,7 @@ class PlannerNode(Node):
             job, s.max_queued_calls)
         if admission is Admission.QUEUED:
             path = await job.future
+            job.taken.set()
             if path is not None:
                 response.plan = path
         elif admission is Admission.FULL:
@@ -232,12 +237,18 @@ class PlannerNode(Node):
             if (job := self._mailbox.take()) is None:
                 return
             self._current = job
-            path = self._plan(job)
+            outcome = self._plan(job)
             if job.is_call:
-                self._answer(job, path)
+                answer = outcome.path if not self._stopping.is_set() else None
+                self._answer(job, answer)
+                # the answer goes out first: publishing now would compete with its sending
+                # for the interpreter lock, so give it a moment unless more work is waiting
+                job.taken.wait(SHUTDOWN_STEP_S)
+                self._mailbox.wait_for_work(ANSWER_GRACE_S)
+            self._report(job, outcome)
 
-    def _plan(self, job: Job) -> Path | None:
-        """Plan one job, publish and log it; return the tool path of a success, else None."""
+    def _plan(self, job: Job) -> jobs.Outcome:
+        """Plan one job into its messages and log line."""
         s = self._settings
         start = self._states.start(s.arm.joint_names, s.start)
         self.get_logger().debug(f'planning {job.label} {jobs.describe_goal(job.goal)} m')
@@ -245,26 +256,30 @@ class PlannerNode(Node):
             outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
                                self._blanks)
         except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
-            outcome = jobs.Outcome(False, f'{job.label} {jobs.describe_goal(job.goal)} m: '
-                                          f'planning failed: {exc!r}')
-            self.get_logger().error(outcome.log)
+            return jobs.Outcome(False, f'{job.label} {jobs.describe_goal(job.goal)} m: '
+                                       f'planning failed: {exc!r}', error=True)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
+        return outcome
+
+    def _report(self, job: Job, outcome: jobs.Outcome) -> None:
+        """Publish a successful plan and log every one; nothing is published at shutdown."""
         if self._stopping.is_set():
             self._unplanned(job)
-            return None
-        if not outcome.succeeded:
-            if not job.is_call:
-                self._counters.add('goals_failed')
-            self.get_logger().warning(outcome.log)
-            return None
-        self._trajectories.publish(outcome.trajectory)
-        self._paths.publish(outcome.path)
-        self._states.trajectory_ended(*outcome.end)
+            return
         if not job.is_call:
-            self._counters.add('goals_planned')
+            self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
+        if not outcome.succeeded:
+            log = self.get_logger().error if outcome.error else self.get_logger().warning
+            log(outcome.log)
+            return
+        traj = outcome.trajectory
+        self._trajectories.publish(trajectory_msg(traj))
+        if self._paths.get_subscription_count():      # a long path costs time to convert
+            s = outcome.settings
+            self._paths.publish(outcome.path or path_msg(s.arm, traj, self._header(s.base_frame)))
+        self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
         self.get_logger().info(outcome.log)
-        return outcome.path
 
     def _answer(self, job: Job, path: Path | None) -> None:
         """Hand a call its answer (once), for the executor thread to complete its Future."""
