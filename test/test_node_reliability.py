@@ -22,6 +22,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from test_node import fmt, HOPELESS_GOAL
 from trajplan_ros import paper_arm
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 
@@ -200,3 +201,30 @@ def test_planned_paths_are_published_for_goals_and_calls(lone_node, peer) -> Non
     published = paths.get(timeout=LIVENESS_S)
     assert ends_at(published, (0.2, 0.0, 0.1))
     assert len(published.poses) == len(answer.plan.poses)
+
+
+def test_a_plan_past_max_planning_time_ends_timed_out(start_node, peer) -> None:
+    node = start_node('-r', '__ns:=/deadline', '-p', 'algorithm:=pso', '-p', 'population:=5000',
+                      '-p', 'max_iterations:=1000000', '-p', 'max_planning_time:=0.05')
+    try:
+        answer = peer.call(GetPlan, '/deadline/plan_trajectory', plan_request(HOPELESS_GOAL))
+        assert list(answer.plan.poses) == []
+        node.wait_for(r'service call #1 .*: timed_out: planning ran past max_planning_time '
+                      r'0.05 s; best position error \S+ m')
+        assert not node.has(r'published ')
+    finally:
+        assert node.stop() == 0, node.output
+
+
+def test_malformed_messages_change_nothing(lone_node, peer) -> None:
+    ns = '/malformed_messages_change_nothing'
+    odd = [float('nan'), float('inf'), -float('inf'), 1e308, -1e308, 5e-324]
+    for k, value in enumerate(odd):
+        peer.publish(Point, f'{ns}/goal', Point(x=value, y=0.1, z=odd[k - 1]))
+        peer.publish(JointState, f'{ns}/joint_states',
+                     JointState(name=['joint1', 'joint2', 'joint2'], position=[value] * (k % 4)))
+    answer = peer.call(GetPlan, f'{ns}/plan_trajectory', plan_request(tuple(PAPER_TARGET)))
+    assert ends_at(answer.plan, tuple(PAPER_TARGET))
+    # from q = 0 still (no message was taken), so the paper's exact minimum
+    lone_node.wait_for(r'service call #1 .* from q = \(0, 0, 0, 0, 0\) rad: reached in 4.5143 s')
+    assert 'Traceback' not in lone_node.output and lone_node.proc.poll() is None

@@ -105,7 +105,7 @@ class Objective:
         if out.size:
             i = int(out[0])
             raise InvalidRequest(
-                f'start joint {arm.joint_names[i]} = {q[i]:.4f} rad is outside its limits '
+                f'start joint {arm.joint_names[i]} = {q[i]:.6g} rad is outside its limits '
                 f'[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]')
         return np.clip(q, arm.lower, arm.upper)
 

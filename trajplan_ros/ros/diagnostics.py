@@ -31,7 +31,7 @@ class Counters:
     """Thread-safe counts of goals and calls, and recent plan times."""
 
     FIELDS = ('goals_received', 'goals_planned', 'goals_superseded', 'goals_failed',
-              'calls_received', 'calls_answered')
+              'calls_received', 'calls_answered', 'plans_timed_out')
 
     def __init__(self) -> None:
         self._lock = threading.Lock()

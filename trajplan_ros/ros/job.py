@@ -14,7 +14,7 @@ from typing import Callable, Sequence
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from std_msgs.msg import Header
-from trajplan_ros.planning import plan, PlanResult, Trajectory, trajectory_points
+from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory, trajectory_points
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import path_msg
@@ -40,6 +40,7 @@ class Outcome:
     settings: Settings | None = None         # the settings it was planned with
     plan_time_s: float | None = None
     error: bool = False                      # a fault of ours, not of the goal
+    timed_out: bool = False                  # ended at max_planning_time
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -60,7 +61,8 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     timed = result.plan_time_s if result.joint_goal is not None else None
     if not result.success:
-        return Outcome(False, _refusal(where, result, took), plan_time_s=timed)
+        return Outcome(False, _refusal(where, result, took), plan_time_s=timed,
+                       timed_out=result.status is PlanStatus.TIMED_OUT)
     points = trajectory_points(result.start, result.joint_goal, s.omega, s.sample_period)
     if points > s.max_trajectory_points:
         return Outcome(False, f'{where}: refused: the trajectory would need {points} points, '

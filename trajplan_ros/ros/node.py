@@ -260,6 +260,8 @@ class PlannerNode(Node):
                                        f'planning failed: {exc!r}', error=True)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
+        if outcome.timed_out:
+            self._counters.add('plans_timed_out')
         return outcome
 
     def _report(self, job: Job, outcome: jobs.Outcome) -> None:
