@@ -156,3 +156,23 @@ def test_diagnostics_warn_on_slow_calls_and_superseded_goals() -> None:
     slow = status(3, 1.5)
     assert slow.level == DiagnosticStatus.WARN and 'waited 1.5 s' in slow.message
     assert {kv.key: kv.value for kv in slow.values}['calls_waiting'] == '3'
+
+
+def test_other_robots_joints_are_not_checked_and_repeats_are_flushed() -> None:
+    logged: list[str] = []
+    clock = FakeClock()
+    monitor = JointStateMonitor(logged.append, repeat_period=5.0, clock=clock)
+    # a gripper's NaN or a duplicate gripper name is not ours: the arm's joints are taken
+    monitor.update(['joint1', 'gripper', 'gripper'], [0.3, math.nan, 0.0], ARM)
+    assert logged == [] and monitor.start(ARM, [0.0] * 3).q.tolist() == [0.3, 0.0, 0.0]
+    # the same kind with another text is a repeat; the timer flushes what is left
+    monitor.update(['joint2'], [math.inf], ARM)
+    monitor.update(['joint3'], [math.nan], ARM)
+    monitor.flush_repeats()
+    assert logged == ['ignored joint_states: non-finite position for joint2']
+    clock.now = 5.0
+    monitor.flush_repeats()
+    assert logged[1] == ('ignored joint_states: non-finite position for joint3 (again, 1 times '
+                         'in the last 5 s)')
+    monitor.flush_repeats()
+    assert len(logged) == 2                              # nothing new to say

@@ -49,12 +49,15 @@ def lone_node(start_node, request) -> Iterator[NodeProcess]:
     assert node.stop() == 0, node.output
 
 
-def test_a_lone_call_is_answered_with_nothing_else_happening(lone_node, peer) -> None:
+def test_a_lone_call_is_answered_with_nothing_else_happening(start_node, peer) -> None:
     # the answer is handed from the worker thread to the waiting coroutine: nothing but that
-    # hand-over can wake the executor here (no other call, goal, state or parameter traffic)
-    ns = '/a_lone_call_is_answered_with_nothing_else_happening'
+    # hand-over can wake the executor here (no other call, goal, state or parameter traffic,
+    # and the diagnostics timer is an hour away), so a missed wake-up would hang this call
+    ns = '/lone'
+    node = start_node('-r', f'__ns:={ns}', '-p', 'diagnostic_updater.period:=3600.0')
     answer = peer.call(GetPlan, f'{ns}/plan_trajectory', plan_request((0.2, 0.1, 0.15)))
     assert ends_at(answer.plan, (0.2, 0.1, 0.15))
+    assert node.stop() == 0, node.output
 
 
 def test_concurrent_callers_are_all_answered_once_in_order(lone_node) -> None:

@@ -4,9 +4,11 @@
 The arm's measured state from joint_states, with every problem reported, and a plan's start.
 
 A joint_states message can be wrong in four ways: its name and position lists differ in length,
-a position is not finite, a name appears twice, or it names none of the arm's joints. Each
-distinct problem is logged the first time it is seen; its repeats are counted and logged at
-most once per ``repeat_period`` seconds. A message with a problem changes nothing. Nothing here
+one of the arm's joints has a non-finite position or appears twice, or it names none of the
+arm's joints (other joints, such as a gripper's, are not checked: they are not ours). Each kind
+of problem is logged the first time it is seen; its repeats are counted and summarised at most
+once per ``repeat_period`` seconds (``flush_repeats`` summarises what is left). A message with
+a problem changes nothing. Nothing here
 imports rclpy: the node passes the message's lists and a logging function.
 """
 from __future__ import annotations
@@ -57,7 +59,8 @@ class JointStateMonitor:
         self._last_end: dict[str, float] = {}
         #: problem kind -> how many messages had it
         self.problems: collections.Counter[str] = collections.Counter()
-        self._repeats: dict[str, list[float]] = {}       # text -> [unreported count, last log]
+        #: problem kind -> [repeats not yet logged, time of the last log line, latest text]
+        self._repeats: dict[str, list] = {}
 
     def update(self, names: Sequence[str], positions: Sequence[float],
                arm_joints: Sequence[str]) -> None:
@@ -97,34 +100,51 @@ class JointStateMonitor:
         """Return (kind, text) of what is wrong with a message, or None."""
         if len(names) != len(positions):
             return LENGTH, f'{len(names)} names but {len(positions)} positions'
-        twice = sorted({n for n in names if names.count(n) > 1})
-        if twice:
-            return DUPLICATE, f"duplicate name {', '.join(twice)}"
-        bad = [n for n, q in zip(names, positions) if not math.isfinite(q)]
-        if bad:
-            return NON_FINITE, f"non-finite position for {', '.join(bad)}"
-        if not set(names) & set(arm_joints):
+        ours = set(arm_joints)
+        seen = collections.Counter(n for n in names if n in ours)
+        if not seen:
             return UNKNOWN, (f"names none of the arm's joints: got {', '.join(names)}; "
                              f"expected {', '.join(arm_joints)}")
+        twice = sorted(n for n, k in seen.items() if k > 1)
+        if twice:
+            return DUPLICATE, f"duplicate name {', '.join(twice)}"
+        bad = [n for n, q in zip(names, positions) if n in ours and not math.isfinite(q)]
+        if bad:
+            return NON_FINITE, f"non-finite position for {', '.join(bad)}"
         return None
 
     def _report(self, kind: str, text: str) -> None:
-        """Log a problem's first occurrence at once, its repeats at most once a period."""
+        """Log a kind of problem at once the first time, its repeats at most once a period."""
         now = self._clock()
         with self._lock:
             self.problems[kind] += 1
-            seen = self._repeats.get(text)
-            if seen is None:
-                self._repeats[text] = [0, now]
+            entry = self._repeats.get(kind)
+            if entry is None:
+                self._repeats[kind] = [0, now, text]
                 message = f'ignored joint_states: {text}'
             else:
-                seen[0] += 1
-                if now - seen[1] < self._period:
-                    return
-                message = (f'ignored joint_states: {text} (again, {seen[0]:g} times in the '
-                           f'last {now - seen[1]:.0f} s)')
-                seen[:] = [0, now]
-        self._warn(message)
+                entry[0] += 1
+                entry[2] = text
+                message = self._summary(kind, now)
+        if message:
+            self._warn(message)
+
+    def _summary(self, kind: str, now: float) -> str | None:
+        """Return the summary line of ``kind``'s repeats if its period is over (lock held)."""
+        count, last, text = self._repeats[kind]
+        if not count or now - last < self._period:
+            return None
+        self._repeats[kind][:2] = [0, now]
+        return (f'ignored joint_states: {text} (again, {count:g} times in the last '
+                f'{now - last:.0f} s)')
+
+    def flush_repeats(self) -> None:
+        """Log the summaries whose period is over (call it now and then, e.g. from a timer)."""
+        now = self._clock()
+        with self._lock:
+            messages = [self._summary(kind, now) for kind in list(self._repeats)]
+        for message in filter(None, messages):
+            self._warn(message)
 
     def counts(self) -> Mapping[str, int]:
         """Messages ignored so far, by problem kind (every kind listed)."""

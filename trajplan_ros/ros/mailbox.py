@@ -40,6 +40,8 @@ class Job:
     future: Any = None
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
+    planned_answer: bool = False     # the call was answered with a plan
+    settled: bool = False            # logged and counted
     taken: threading.Event = field(default_factory=threading.Event)   # the answer is taken
 
     @property

@@ -40,6 +40,7 @@ import math
 import signal
 import sys
 import threading
+import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -130,6 +131,7 @@ class PlannerNode(Node):
         self._states = JointStateMonitor(self.get_logger().warning)
         self._stopping = threading.Event()
         self._answer_lock = threading.Lock()
+        self._publish_lock = threading.Lock()
         self._finished: collections.deque[tuple[Job, Path | None]] = collections.deque()
         self._blanks: list[PoseStamped] = []                   # worker thread only
         self._current: Job | None = None                        # the job being planned
@@ -145,7 +147,7 @@ class PlannerNode(Node):
                                  qos_profile_sensor_data)
         self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
                             callback_group=ReentrantCallbackGroup())
-        self.create_timer(1.0, self._publish_diagnostics)
+        self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
         arm = self._settings.arm
@@ -180,7 +182,7 @@ class PlannerNode(Node):
         self.get_logger().debug(f'queued {job.label} {jobs.describe_goal(job.goal)} m')
         superseded = self._mailbox.put_goal(job)
         if superseded is job:
-            self._unplanned(job)
+            self._give_up(job)
         elif superseded is not None:
             self._counters.add('goals_superseded')
             self.get_logger().info(
@@ -212,7 +214,7 @@ class PlannerNode(Node):
         elif problem:
             self._refused(job, problem)
         else:
-            self._unplanned(job)
+            self._give_up(job)
         self._counters.add('calls_answered')
         return response
 
@@ -220,32 +222,31 @@ class PlannerNode(Node):
         self.get_logger().warning(
             f'{job.label} {jobs.describe_goal(job.goal)} m: refused: {reason}')
 
-    def _unplanned(self, job: Job) -> None:
-        if not job.is_call:
-            self._counters.add('goals_failed')
-        self.get_logger().info(
-            f'{job.label} {jobs.describe_goal(job.goal)} m: unplanned: shutting down')
-
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
     def _header(self, frame_id: str) -> Header:
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=frame_id)
 
     def _work(self) -> None:
-        while True:
-            self._blanks.extend(PoseStamped() for _ in range(BLANK_POSES - len(self._blanks)))
-            if (job := self._mailbox.take()) is None:
-                return
+        while (job := self._mailbox.take()) is not None:
             self._current = job
-            outcome = self._plan(job)
-            if job.is_call:
-                answer = outcome.path if not self._stopping.is_set() else None
-                self._answer(job, answer)
-                # the answer goes out first: publishing now would compete with its sending
-                # for the interpreter lock, so give it a moment unless more work is waiting
-                job.taken.wait(SHUTDOWN_STEP_S)
-                self._mailbox.wait_for_work(ANSWER_GRACE_S)
-            self._report(job, outcome)
+            try:
+                self._handle(job)
+            except Exception as exc:  # noqa: BLE001 - a bug must not end the planning thread
+                self.get_logger().error(f'{job.label} {jobs.describe_goal(job.goal)} m: '
+                                        f'failed: {exc!r}')
+                self._give_up(job, log=False)
+            self._current = None
+
+    def _handle(self, job: Job) -> None:
+        outcome = self._plan(job)
+        if job.is_call:
+            self._answer(job, None if self._stopping.is_set() else outcome.path)
+            # the answer goes out first: publishing now would compete with its sending for
+            # the interpreter lock, so give it a moment unless more work is waiting
+            job.taken.wait(SHUTDOWN_STEP_S)
+            self._mailbox.wait_for_work(ANSWER_GRACE_S)
+        self._report(job, outcome)
 
     def _plan(self, job: Job) -> jobs.Outcome:
         """Plan one job into its messages and log line."""
@@ -266,29 +267,51 @@ class PlannerNode(Node):
 
     def _report(self, job: Job, outcome: jobs.Outcome) -> None:
         """Publish a successful plan and log every one; nothing is published at shutdown."""
-        if self._stopping.is_set():
-            self._unplanned(job)
+        with self._publish_lock:
+            if self._stopping.is_set() or not self._settle(job):
+                self._give_up(job)
+                return
+            if not job.is_call:
+                self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
+            if outcome.succeeded:
+                traj = outcome.trajectory
+                self._trajectories.publish(trajectory_msg(traj))
+                if self._paths.get_subscription_count():     # a long path costs time to convert
+                    s = outcome.settings
+                    self._paths.publish(outcome.path or path_msg(s.arm, traj,
+                                                                 self._header(s.base_frame)))
+                self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
+        if outcome.succeeded:
+            self.get_logger().info(outcome.log)
+        else:
+            (self.get_logger().error if outcome.error else self.get_logger().warning)(outcome.log)
+
+    def _settle(self, job: Job) -> bool:
+        """Mark ``job`` as logged and counted; False if it already was."""
+        with self._answer_lock:
+            first, job.settled = not job.settled, True
+            return first
+
+    def _give_up(self, job: Job, log: bool = True) -> None:
+        """End a job unplanned (shutting down, or a fault): answer a call empty, count a goal."""
+        if job.is_call:
+            self._answer(job, None)
+        if not self._settle(job):
             return
         if not job.is_call:
-            self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
-        if not outcome.succeeded:
-            log = self.get_logger().error if outcome.error else self.get_logger().warning
-            log(outcome.log)
-            return
-        traj = outcome.trajectory
-        self._trajectories.publish(trajectory_msg(traj))
-        if self._paths.get_subscription_count():      # a long path costs time to convert
-            s = outcome.settings
-            self._paths.publish(outcome.path or path_msg(s.arm, traj, self._header(s.base_frame)))
-        self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
-        self.get_logger().info(outcome.log)
+            self._counters.add('goals_failed')
+        if log:
+            given = ('answered with a plan; not published' if job.planned_answer
+                     else 'unplanned')
+            self.get_logger().info(
+                f'{job.label} {jobs.describe_goal(job.goal)} m: {given}: shutting down')
 
     def _answer(self, job: Job, path: Path | None) -> None:
         """Hand a call its answer (once), for the executor thread to complete its Future."""
         with self._answer_lock:
             if job.answered:
                 return
-            job.answered = True
+            job.answered, job.planned_answer = True, path is not None
             self._finished.append((job, path))
         self._deliver.trigger()
 
@@ -299,6 +322,10 @@ class PlannerNode(Node):
 
     def _publish_diagnostics(self) -> None:
         waiting, oldest = self._mailbox.waiting()
+        current = self._current
+        if current is not None and current.is_call and not current.answered:
+            oldest = max(oldest, time.monotonic() - current.queued_at)
+        self._states.flush_repeats()
         self._diagnostics.publish(diagnostic_array(
             self.get_fully_qualified_name(), self._header(''), self._counters.snapshot(),
             waiting, oldest, self._counters.superseded_since_last_report(),
@@ -308,16 +335,14 @@ class PlannerNode(Node):
 
     def shut_down(self) -> None:
         """Stop intake and the running plan, answer every waiting call with an empty plan."""
-        self._stopping.set()
+        with self._publish_lock:
+            self._stopping.set()
         for job in self._mailbox.close():
-            self._unplanned(job)
-            if job.is_call:
-                self._answer(job, None)
+            self._give_up(job)
         self._worker.join(timeout=SHUTDOWN_STEP_S)       # the running plan stops at its next check
         current = self._current
-        if self._worker.is_alive() and current is not None and current.is_call:
-            self._unplanned(current)                     # still in one long iteration
-            self._answer(current, None)
+        if current is not None:
+            self._give_up(current)                       # still in one long iteration
         answered = threading.Event()
         for _ in range(int(SHUTDOWN_STEP_S / 0.01)):     # the answers go out on the executor
             snapshot = self._counters.snapshot()
@@ -329,11 +354,14 @@ class PlannerNode(Node):
         self._flushed.wait(SHUTDOWN_STEP_S)
 
 
-def _spin(executor: SingleThreadedExecutor) -> None:
+def _spin(executor: SingleThreadedExecutor, failure: list[BaseException]) -> None:
     try:
         executor.spin()
     except ExternalShutdownException:
         pass
+    except Exception as exc:  # noqa: BLE001 - reported by main, which exits non-zero
+        get_logger('trajplan').fatal(f'the executor failed: {exc!r}')
+        failure.append(exc)
 
 
 def main(args: list[str] | None = None) -> int:
@@ -351,7 +379,8 @@ def main(args: list[str] | None = None) -> int:
         return 2
     executor = SingleThreadedExecutor()
     executor.add_node(node)
-    spinner = threading.Thread(target=_spin, args=(executor,), name='trajplan_executor',
+    failure: list[BaseException] = []
+    spinner = threading.Thread(target=_spin, args=(executor, failure), name='trajplan_executor',
                                daemon=True)
     spinner.start()
     while spinner.is_alive() and not stop.wait(0.5):
@@ -361,7 +390,7 @@ def main(args: list[str] | None = None) -> int:
     spinner.join(timeout=SHUTDOWN_STEP_S)
     node.destroy_node()
     rclpy.try_shutdown()
-    return 0
+    return 1 if failure else 0
 
 
 if __name__ == '__main__':

@@ -82,6 +82,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('max_trajectory_points', 10000,
                   'most points a published trajectory may have; a plan needing more is refused',
                   bounds=(2, 50000)),
+    ParameterSpec('diagnostic_updater.period', 1.0,
+                  'period of /diagnostics, s (read at start-up)', bounds=(0.1, 3600.0)),
     ParameterSpec('max_queued_calls', 1000,
                   'most service calls that may wait for a plan; more are answered at once with '
                   'an empty plan', bounds=(1, 100000)),
@@ -111,6 +113,7 @@ class Settings:
     max_planning_time: float
     max_trajectory_points: int
     max_queued_calls: int
+    diagnostic_period: float
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> Settings:
@@ -137,4 +140,5 @@ class Settings:
                    sample_period=values['sample_period'], start=start,
                    max_planning_time=values['max_planning_time'],
                    max_trajectory_points=values['max_trajectory_points'],
-                   max_queued_calls=values['max_queued_calls'])
+                   max_queued_calls=values['max_queued_calls'],
+                   diagnostic_period=values['diagnostic_updater.period'])
