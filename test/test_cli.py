@@ -54,7 +54,10 @@ def test_plan_past_max_planning_time_is_timed_out(monkeypatch, capsys):
 
 @pytest.mark.parametrize('argv, reason', [
     (['plan', '0.1', '0.2'], 'X Y Z'),
-    (['plan', *TARGET, '--start', '0', '0', '0', '0', '0', '0'], 'at most 5'),
+    (['plan', *TARGET, '--start', '0', '0', '0', '0', '0', '0'],
+     'a start needs 5 joint angles (or the 4 planned ones), got 6'),
+    (['plan', *TARGET, '--start', '0.1'],
+     'a start needs 5 joint angles (or the 4 planned ones), got 1'),
     (['plan', '--goals', '/nonexistent/goals.csv'], 'cannot read'),
     (['plan', *TARGET, '--max-planning-time', '0'], 'max_planning_time'),
 ])
@@ -69,3 +72,20 @@ def test_argparse_errors_exit_2():
                            '0.1'],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and 'not a finite number' in proc.stderr
+
+
+def test_csv_starts_are_strict_and_empty_fields_get_a_reason(tmp_path, capsys):
+    goals = tmp_path / 'goals.csv'
+    goals.write_text('0.1,0.1,0.1,0.0\n,,\n\n0.1,0.1,0.1,0.2,0.1,0.0,0.1\n'
+                     '1e308,1e308,1e308\n', encoding='utf-8')
+    assert main(['plan', '--goals', str(goals), '--json']) == 1
+    captured = capsys.readouterr()
+    lines = [json.loads(line) for line in captured.out.splitlines()]
+    assert [r['line'] for r in lines] == [1, 2, 4, 5]              # the blank line 3: skipped
+    assert lines[0]['status'] == 'rejected'
+    assert 'a start needs 5 joint angles (or the 4 planned ones), got 1' in lines[0]['message']
+    assert lines[1]['message'] == ('line 2: empty field(s) 1, 2, 3: expected '
+                                   'x,y,z[,start angles]')
+    assert lines[2]['success'] and lines[2]['joint_goal'][4] == 0.0    # held joint5 at 0
+    assert lines[3]['status'] == 'rejected' and 'beyond the arm' in lines[3]['message']
+    assert captured.err == ''                                          # no numpy warnings

@@ -94,7 +94,8 @@ def test_a_valid_change_takes_effect_for_the_next_plan(planner, peer, trajectori
      r'joint_names must be 5 distinct non-empty names'),
     ('arm.planned', 6, r'planned joints must be between 2 and 5, got 6'),
     ('arm.alpha', [0.0, 0.0, 0.0], r'alpha needs 5 values'),
-    ('start_positions', [0.0, 0.0, 0.0, 0.0], r'start_positions needs 5 finite angles'),
+    ('start_positions', [0.0, 0.0, 0.0],
+     r'start_positions: a start needs 5 joint angles \(or the 4 planned ones\), got 3'),
 ])
 def test_a_bad_value_is_rejected_with_its_reason(planner, peer, name, value, reason) -> None:
     before = peer.get_parameters(NODE, [name])

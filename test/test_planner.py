@@ -211,3 +211,14 @@ def test_a_bad_planning_time_raises(limit):
 def test_a_stop_that_cannot_be_called_raises():
     with pytest.raises(ValueError, match='stop'):
         plan(TARGET, stop=True)
+
+
+def test_a_start_gives_every_joint_or_the_planned_ones() -> None:
+    full = plan(TARGET, [0.1, 0.2, 0.0, 0.0, 0.0], seed=0)
+    planned = plan(TARGET, [0.1, 0.2, 0.0, 0.0], seed=0)
+    np.testing.assert_array_equal(full.joint_goal, planned.joint_goal)
+    for start in ([0.1], [0.0] * 6):
+        result = plan(TARGET, start, seed=0)
+        assert result.status is PlanStatus.REJECTED
+        assert f'a start needs 5 joint angles (or the 4 planned ones), got {len(start)}' in (
+            result.message)

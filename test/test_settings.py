@@ -70,8 +70,9 @@ def test_defaults_give_the_paper_arm() -> None:
     ({'mode': 'sideways'}, ValueError, r"mode must be one of free, radial, got 'sideways'"),
     ({'algorithm': 'sa'}, ValueError, r'algorithm must be one of iepso, pso, spso, ga, de'),
     ({'base_frame': ''}, ValueError, r'base_frame must not be empty'),
-    ({'start_positions': [0.0] * 4}, ValueError, r'start_positions needs 5 finite angles'),
-    ({'start_positions': [0.0, np.nan, 0, 0, 0]}, ValueError, r'needs 5 finite angles'),
+    ({'start_positions': [0.0] * 3}, ValueError,
+     r'start_positions: a start needs 5 joint angles \(or the 4 planned ones\), got 3'),
+    ({'start_positions': [0.0, np.nan, 0, 0, 0]}, ValueError, r'non-finite angle'),
     ({'arm.sign': [1, 1, 1, 2, 1]}, InvalidArmModel, r'sign must be \+1 or -1'),
     ({'arm.planned': 6}, InvalidArmModel, r'planned joints must be between 2 and 5'),
 ])
@@ -82,3 +83,8 @@ def test_bad_values_are_refused_with_the_reason(change, error, reason) -> None:
 
 def test_seed_minus_one_means_a_fresh_seed() -> None:
     assert Settings.from_parameters({**default_values(), 'seed': -1}).seed is None
+
+
+def test_start_positions_may_give_the_planned_joints_only() -> None:
+    settings = Settings.from_parameters({**default_values(), 'start_positions': [0.1] * 4})
+    np.testing.assert_array_equal(settings.start, [0.1, 0.1, 0.1, 0.1, 0.0])

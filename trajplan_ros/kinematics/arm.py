@@ -177,6 +177,22 @@ class ArmModel:
         """
         return float(np.sum(np.hypot(self.a, self.d)))
 
+    def full_start(self, angles: Sequence[float]) -> np.ndarray:
+        """
+        Return a start as every joint's angle (rad), from all of them or the planned ones.
+
+        A start gives every joint angle of the arm, or only the planned ones (the held joints are
+        then at 0); any other count raises ValueError with the reason.
+        """
+        q = np.asarray(angles, dtype=float).ravel()
+        if q.size == self.planned < self.n_joints:
+            q = np.concatenate((q, np.zeros(self.n_joints - self.planned)))
+        if q.size != self.n_joints:
+            counts = (f'{self.n_joints} joint angles' if self.planned == self.n_joints else
+                      f'{self.n_joints} joint angles (or the {self.planned} planned ones)')
+            raise ValueError(f'a start needs {counts}, got {q.size}')
+        return q
+
     def within_limits(self, q: np.ndarray, tol: float = 1e-12) -> np.ndarray:
         """Return True where every joint of q (..., n_joints) lies inside its limits."""
         q = np.asarray(q, dtype=float)

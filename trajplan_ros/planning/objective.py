@@ -87,7 +87,8 @@ class Objective:
                 f'goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}')
         if not np.all(np.isfinite(g)):
             raise InvalidRequest(f'goal has a non-finite coordinate: {g.tolist()}')
-        dist = float(np.linalg.norm(g))
+        with np.errstate(over='ignore'):             # a goal of 1e308 is just far away
+            dist = float(np.linalg.norm(g))
         if dist > arm.reach:
             raise InvalidRequest(
                 f'goal is {dist:.4f} m from the base, '
@@ -96,9 +97,10 @@ class Objective:
 
     @staticmethod
     def _check_start(arm: ArmModel, start: np.ndarray) -> np.ndarray:
-        q = np.asarray(start, dtype=float)
-        if q.shape != (arm.n_joints,):
-            raise InvalidRequest(f'start needs {arm.n_joints} joint angles, got shape {q.shape}')
+        try:
+            q = arm.full_start(start)
+        except ValueError as exc:
+            raise InvalidRequest(str(exc)) from None
         if not np.all(np.isfinite(q)):
             raise InvalidRequest(f'start has a non-finite joint angle: {q.tolist()}')
         out = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))

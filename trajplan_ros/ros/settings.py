@@ -128,10 +128,13 @@ class Settings:
                                  f'got {values[spec.name]!r}')
         if not values['base_frame']:
             raise ValueError('base_frame must not be empty')
-        start = np.asarray(values['start_positions'], dtype=float)
-        if start.shape != (arm.n_joints,) or not np.all(np.isfinite(start)):
-            raise ValueError(f'start_positions needs {arm.n_joints} finite angles for the '
-                             f'{arm.n_joints}-joint arm, got {list(start)} (change both at once)')
+        try:
+            start = arm.full_start(values['start_positions'])
+        except ValueError as exc:
+            raise ValueError(f'start_positions: {exc} for the {arm.n_joints}-joint arm '
+                             '(change both at once)') from None
+        if not np.all(np.isfinite(start)):
+            raise ValueError(f'start_positions has a non-finite angle: {start.tolist()}')
         return cls(arm=arm, omega=values['angular_velocity'], mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],

@@ -75,16 +75,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _start_vector(values: Sequence[float] | None, n_joints: int) -> np.ndarray | None:
-    if values is None:
-        return None
-    if len(values) > n_joints:
-        raise UsageError(f'--start takes at most {n_joints} angles, got {len(values)}')
-    q = np.zeros(n_joints)
-    q[: len(values)] = values
-    return q
-
-
 def _is_number(text: str) -> bool:
     try:
         float(text)
@@ -100,22 +90,25 @@ def _goal_lines(path: str) -> Iterator[tuple[int, list[str]]]:
     with handle:
         for number, row in enumerate(csv.reader(handle), start=1):
             cells = [c.strip() for c in row]
-            if not any(cells) or cells[0].startswith('#'):
-                continue
+            if len(cells) <= 1 and not any(cells) or cells and cells[0].startswith('#'):
+                continue                                  # a blank line or a comment
             header = first and not any(_is_number(c) for c in cells)     # e.g. x,y,z,q1,...
             first = False
             if not header:
                 yield number, cells
 
 
-def _parse_line(cells: list[str], n_joints: int) -> tuple[np.ndarray, np.ndarray | None]:
+def _parse_line(cells: list[str]) -> tuple[np.ndarray, np.ndarray | None]:
     if len(cells) < 3:
         raise UsageError(f'expected x,y,z[,start angles], got {len(cells)} field(s)')
+    if not all(cells):
+        empty = [str(i + 1) for i, c in enumerate(cells) if not c]
+        raise UsageError(f"empty field(s) {', '.join(empty)}: expected x,y,z[,start angles]")
     try:
         values = [float(c) for c in cells]
     except ValueError as exc:
         raise UsageError(f'not a number: {exc}') from None
-    start = _start_vector(values[3:], n_joints) if len(values) > 3 else None
+    start = np.array(values[3:]) if len(values) > 3 else None
     return np.array(values[:3]), start
 
 
@@ -151,7 +144,8 @@ def _run_plan(args: argparse.Namespace) -> int:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
                              f'got {len(args.xyz)} number(s)')
-        result = plan(args.xyz, _start_vector(args.start, arm.n_joints), **settings)
+        start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
+        result = plan(args.xyz, start, **settings)
         print(json.dumps(_record(result, None)) if args.json else _human(result))
         return 0 if result.success else 1
     if args.xyz:
@@ -163,14 +157,14 @@ def _run_plan(args: argparse.Namespace) -> int:
     failures = 0
     for number, cells in lines:
         try:
-            goal, start = _parse_line(cells, arm.n_joints)
+            goal, start = _parse_line(cells)
         except UsageError as exc:
             failures += 1
             record = _unparsed(number, str(exc), args)
             print(json.dumps(record) if args.json else record['message'])
             continue
         if start is None:
-            start = _start_vector(args.start, arm.n_joints)
+            start = args.start
         result = plan(goal, start, **settings)
         failures += not result.success
         print(json.dumps(_record(result, number)) if args.json else _human(result))
