@@ -89,3 +89,11 @@ def test_csv_starts_are_strict_and_empty_fields_get_a_reason(tmp_path, capsys):
     assert lines[2]['success'] and lines[2]['joint_goal'][4] == 0.0    # held joint5 at 0
     assert lines[3]['status'] == 'rejected' and 'beyond the arm' in lines[3]['message']
     assert captured.err == ''                                          # no numpy warnings
+
+
+def test_a_radial_goal_at_the_origin_is_refused_without_warnings(capsys):
+    assert main(['plan', '0', '0', '0', '--mode', 'radial', '--json']) == 1
+    captured = capsys.readouterr()
+    record = json.loads(captured.out)
+    assert record['status'] == 'rejected' and 'away from the base origin' in record['message']
+    assert captured.err == ''

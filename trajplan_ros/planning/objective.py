@@ -64,6 +64,9 @@ class Objective:
         self.omega = float(omega)
         self.shaping = shaping if shaping is not None else RewardPunishment()
         self.goal = self._check_goal(arm, goal)
+        if self.radial and not np.any(self.goal):
+            raise InvalidRequest('radial mode needs a goal away from the base origin: the goal '
+                                 'ray of eq. (12)-(13) has no direction at the origin')
         self.start = self._check_start(arm, start)
         m = arm.planned
         self.lower = arm.lower[:m].copy()
