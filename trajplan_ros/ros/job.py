@@ -39,7 +39,6 @@ class Outcome:
     trajectory: Trajectory | None = None     # converted when published, after the answer
     settings: Settings | None = None         # the settings it was planned with
     plan_time_s: float | None = None
-    error: bool = False                      # a fault of ours, not of the goal
     timed_out: bool = False                  # ended at max_planning_time
 
 

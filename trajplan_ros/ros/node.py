@@ -201,9 +201,10 @@ class PlannerNode(Node):
                   tolerance=request.tolerance or None, future=Future())
         response.plan = Path(header=self._header(s.base_frame))
         problem = request_problem(request, s.base_frame)
-        admission = Admission.CLOSED if problem else self._mailbox.put_call(
-            job, s.max_queued_calls)
-        if admission is Admission.QUEUED:
+        admission = None if problem else self._mailbox.put_call(job, s.max_queued_calls)
+        if problem:
+            self._refused(job, problem)
+        elif admission is Admission.QUEUED:
             path = await job.future
             job.taken.set()
             if path is not None:
@@ -211,8 +212,6 @@ class PlannerNode(Node):
         elif admission is Admission.FULL:
             self._refused(job, f'{s.max_queued_calls} calls are waiting already '
                                '(max_queued_calls)')
-        elif problem:
-            self._refused(job, problem)
         else:
             self._give_up(job)
         self._counters.add('calls_answered')
@@ -234,7 +233,7 @@ class PlannerNode(Node):
                 self._handle(job)
             except Exception as exc:  # noqa: BLE001 - a bug must not end the planning thread
                 self.get_logger().error(f'{job.label} {jobs.describe_goal(job.goal)} m: '
-                                        f'failed: {exc!r}')
+                                        f'planning failed: {exc!r}')
                 self._give_up(job, log=False)
             self._current = None
 
@@ -253,12 +252,8 @@ class PlannerNode(Node):
         s = self._settings
         start = self._states.start(s.arm.joint_names, s.start)
         self.get_logger().debug(f'planning {job.label} {jobs.describe_goal(job.goal)} m')
-        try:
-            outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
-                               self._blanks)
-        except Exception as exc:  # noqa: BLE001 - a core bug must not end the planning thread
-            return jobs.Outcome(False, f'{job.label} {jobs.describe_goal(job.goal)} m: '
-                                       f'planning failed: {exc!r}', error=True)
+        outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
+                           self._blanks)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
         if outcome.timed_out:
@@ -284,7 +279,7 @@ class PlannerNode(Node):
         if outcome.succeeded:
             self.get_logger().info(outcome.log)
         else:
-            (self.get_logger().error if outcome.error else self.get_logger().warning)(outcome.log)
+            self.get_logger().warning(outcome.log)
 
     def _settle(self, job: Job) -> bool:
         """Mark ``job`` as logged and counted; False if it already was."""

@@ -163,7 +163,8 @@ def flood(env: dict[str, str], count: int, rate: float) -> Result:
         seconds = time.perf_counter() - began
         publisher.wait_for_all_acked(Duration(seconds=TIMEOUT_S))
         settled = _settle(node, sent)
-        counted = _diagnosed_goals(ros, count)
+        counted = _wait_for_diagnostics(ros, _balanced(count),
+                                        'diagnostics accounting for every goal')
     finally:
         ros.close()
         latency_met, latency = poller.finish()
@@ -178,25 +179,30 @@ def flood(env: dict[str, str], count: int, rate: float) -> Result:
                  f'{_verdict(accounted == count and counted)}', '  ' + latency]
 
 
-def _diagnosed_goals(ros: RosClient, count: int) -> bool:
-    """Wait until diagnostics say received = planned + superseded + failed = ``count``."""
+def _wait_for_diagnostics(ros: RosClient, holds: Callable[[dict[str, str]], bool],
+                          what: str) -> bool:
+    """Wait until a status on /diagnostics has values (key -> text) for which ``holds``."""
     box = ros.inbox(DiagnosticArray, '/diagnostics')
 
-    def balanced() -> bool:
+    def reported() -> bool:
         while not box.empty():
             for status in box.get().status:
-                v = {kv.key: kv.value for kv in status.values}
-                ends = ('goals_planned', 'goals_superseded', 'goals_failed')
-                if v.get('goals_received') == str(count) and sum(
-                        int(v[k]) for k in ends) == count:
+                if holds({kv.key: kv.value for kv in status.values}):
                     return True
         return False
 
     try:
-        wait_until(balanced, TIMEOUT_S, 'diagnostics accounting for every goal')
+        wait_until(reported, TIMEOUT_S, what)
     except TimeoutError:
         return False
     return True
+
+
+def _balanced(count: int) -> Callable[[dict[str, str]], bool]:
+    """Diagnostics say received = planned + superseded + failed = ``count``."""
+    ends = ('goals_planned', 'goals_superseded', 'goals_failed')
+    return lambda v: (v.get('goals_received') == str(count)
+                      and sum(int(v[k]) for k in ends) == count)
 
 
 def _settle(node: PlannerProcess, sent: list[tuple[float, float, float]]) -> dict[str, str]:
@@ -232,7 +238,9 @@ def shutdown(env: dict[str, str], queued: int) -> Result:
         node.wait_for(r'planning service call #1 ', TIMEOUT_S)
         rest = [ros.call_async(GetPlan, 'plan_trajectory', plan_request(g))
                 for g in _goals(queued, seed=300)]
-        _wait_for_diagnostic(ros, 'calls_waiting', str(queued))
+        if not _wait_for_diagnostics(ros, lambda v: v.get('calls_waiting') == str(queued),
+                                     f'{queued} calls waiting'):
+            raise TimeoutError(f'the node never had {queued} calls waiting')
         node.proc.send_signal(signal.SIGINT)
         began = time.monotonic()
         code = node.proc.wait(timeout=TIMEOUT_S)
@@ -248,20 +256,6 @@ def shutdown(env: dict[str, str], queued: int) -> Result:
                  f'{answered} of {queued} answered (the running one {first_done}), exit code '
                  f'{code} after {took:.2f} s (target 2 s), '
                  f"{'no traceback' if clean else 'TRACEBACK or bad exit'}: {_verdict(met)}"]
-
-
-def _wait_for_diagnostic(ros: RosClient, key: str, value: str) -> None:
-    """Wait until the node's diagnostics report ``key`` = ``value``."""
-    box = ros.inbox(DiagnosticArray, '/diagnostics')
-
-    def reported() -> bool:
-        while not box.empty():
-            for status in box.get().status:
-                if any(kv.key == key and kv.value == value for kv in status.values):
-                    return True
-        return False
-
-    wait_until(reported, TIMEOUT_S, f'diagnostics reporting {key} = {value}')
 
 
 def _answered(ros: RosClient, future: Any) -> bool:
