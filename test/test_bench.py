@@ -37,7 +37,7 @@ SUMMARY_HEADER = ['method', 'goals', 'success_rate', 'median_error_m', 'worst_er
                   'median_gap', 'median_time_s', 'p99_time_s', 'time_ratio_to_iepso']
 PLANS_HEADER = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
                 + [f'start_q{i}_rad' for i in range(1, 6)] + [f'q{i}_rad' for i in range(1, 5)]
-                + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
+                + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
                    'success'])
 
 
@@ -110,9 +110,10 @@ def test_same_seed_same_answers() -> None:
     assert steps == [1]                                              # one step per case
 
 
-def _results(error: list[float], gap: list[float]) -> Results:
+def _results(error: list[float], gap: list[float], axis: list[float] | None = None) -> Results:
     r = Results.empty(len(error), 4)
     r.error[:], r.gap[:] = error, gap
+    r.axis_error[:] = 0.0 if axis is None else axis
     r.seconds[:] = np.arange(1, len(error) + 1) * 1e-3
     r.x[:] = 0.0
     return r
@@ -128,6 +129,17 @@ def test_success_needs_both_the_error_and_the_gap() -> None:
     assert row.p99_time_s == pytest.approx(np.percentile([1e-3, 2e-3, 3e-3, 4e-3, 5e-3], 99))
     (alone,) = summarise({'pso': r})
     assert np.isnan(alone.time_ratio_to_iepso)                       # no IEPSO row to compare with
+
+
+def test_radial_success_needs_the_axis_on_the_goal_ray() -> None:
+    r = _results([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], axis=[1e-6, 1.1e-6, np.pi])
+    assert r.success.tolist() == [True, False, False]
+
+
+def test_on_goals_without_a_solution_success_is_not_claiming_it() -> None:
+    r = _results([1e-3, 0.0, 1e-3], [np.nan, np.nan, np.nan], axis=[0.0, 0.0, 0.0])
+    r.claimed[:] = [False, False, True]             # the last plan says SUCCEEDED anyway
+    assert r.success.tolist() == [True, False, False]
 
 
 def test_failures_are_listed_with_goal_start_seed_error_and_gap() -> None:

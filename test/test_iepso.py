@@ -9,7 +9,6 @@ import pytest
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import curve_minima
 from trajplan_ros.planning.reference import exact_minimum
 
 ARM = paper_arm()
@@ -106,40 +105,6 @@ def test_curve_search_finds_the_faster_solution(goal, start, seed, mode):
     res = iepso(obj, seed=seed)
     assert res.error <= 1e-9
     assert res.motion_time <= ref.motion_time_s * 1.001
-
-
-def test_curve_minima_are_in_limit_points_near_the_curve():
-    goal, start, seed = CURVE_CASES[0]
-    obj = Objective(ARM, np.array(goal), np.array(start))
-    x = iepso(obj, seed=seed, curve_search=0).x
-    seeds = curve_minima(obj, x)
-    assert len(seeds) >= 1
-    assert np.all((seeds >= obj.lower) & (seeds <= obj.upper))
-    assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
-    assert not np.any(np.all(seeds == x, axis=1))
-    goal, start, seed = RADIAL_CURVE_CASES[0]
-    radial = Objective(ARM, np.array(goal), np.array(start), mode='radial')
-    x = iepso(radial, seed=seed, curve_search=0).x
-    seeds = curve_minima(radial, x)                    # near the other radial solutions
-    assert len(seeds) >= 1
-    assert np.all((seeds >= radial.lower) & (seeds <= radial.upper))
-    assert np.all(np.abs(radial.residuals(*radial.tool(seeds))[:, 3]) < 0.5)
-    six = ArmModel(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0],
-                   alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
-                   d=[0.2, 0, 0, 0.15, 0, 0.1], lower=np.full(6, -2.6), upper=np.full(6, 2.6))
-    # six joints, three position constraints: a surface of solutions, not a curve
-    free6 = Objective(six, six.tool(np.full((1, 6), 0.3))[0][0], np.zeros(6))
-    assert curve_minima(free6, np.full(6, 0.3)).shape == (0, 6)
-    # the paper's arm with its wrist roll planned too: in radial mode the solutions form a curve
-    # along q5 (it turns the tool about its own axis), which the search follows
-    five = ArmModel(a=ARM.a, alpha=ARM.alpha, d=ARM.d, sign=ARM.sign, offset=ARM.offset,
-                    lower=ARM.lower, upper=ARM.upper, joint_names=ARM.joint_names, planned=5)
-    radial5 = Objective(five, TARGET, np.array([0, 0, 0, 0, 0.5]), mode='radial')
-    x5 = iepso(radial5, seed=0, curve_search=0).x
-    seeds5 = curve_minima(radial5, x5)
-    assert len(seeds5) >= 1
-    np.testing.assert_allclose(seeds5[:, :4], np.broadcast_to(x5[:4], (len(seeds5), 4)), atol=1e-9)
-    assert np.all(radial5(seeds5).error <= 1e-12)
 
 
 def test_same_seed_same_answer_bit_for_bit():

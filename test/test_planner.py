@@ -11,9 +11,11 @@ import pytest
 from trajplan_ros import DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
 from trajplan_ros.planning import planner
 from trajplan_ros.planning.iepso import iepso
-from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.planning.planner import ALGORITHMS
+from trajplan_ros.planning.reference import _solutions, radial_angle
+from trajplan_ros.tools.bench.cases import draw_cases
 
 TARGET = PAPER_TARGET.tolist()
 #: Inside the reach sphere but out of reach: IEPSO searches it for dozens of iterations.
@@ -222,3 +224,67 @@ def test_a_start_gives_every_joint_or_the_planned_ones() -> None:
         assert result.status is PlanStatus.REJECTED
         assert f'a start needs 5 joint angles (or the 4 planned ones), got {len(start)}' in (
             result.message)
+
+
+def test_radial_puts_the_tool_axis_on_the_goal_ray_pointing_outward() -> None:
+    result = plan(TARGET, mode='radial', seed=0)
+    assert result.success and result.radial_error_rad <= 1e-9
+    p, u = paper_arm().tool(result.joint_goal[None, :])
+    ray = PAPER_TARGET / np.linalg.norm(PAPER_TARGET)
+    assert u[0] @ ray == pytest.approx(1.0, abs=1e-12)
+    assert 'from the goal ray' in result.message
+
+
+def test_a_mirrored_pose_is_an_axis_error_of_twice_the_goal_angle() -> None:
+    # the old cone reading accepted the tool tilted by eps on the far side of the base z axis
+    arm, goal = paper_arm(), np.array([0.12, 0.05, 0.2])
+    eps = radial_angle(goal)
+    mirrored = _solutions(arm, goal, np.array([-eps]))[0, 1]        # base facing, -eps
+    assert arm.within_limits(np.append(mirrored, 0.0))
+    obj = Objective(arm, goal, np.zeros(5), mode='radial')
+    p, u = obj.tool(mirrored[None, :])
+    assert np.linalg.norm(p[0] - goal) < 1e-12                      # the goal is reached ...
+    assert obj.axis_angle(u)[0] == pytest.approx(2 * eps)           # ... but not along the ray
+    assert obj(mirrored[None, :]).error[0] > 0.01
+    inward = obj.axis_angle(-goal[None, :] / np.linalg.norm(goal))
+    assert inward[0] == pytest.approx(np.pi)                        # pointing at the base: pi
+    result = plan(goal, mode='radial', seed=0)
+    assert result.success and result.radial_error_rad < 1e-9
+
+
+def test_a_goal_without_a_radial_pose_is_not_reached() -> None:
+    cases = draw_cases(paper_arm(), 3, mode=Mode.RADIAL, random_starts=True, seed=5,
+                       only='no-solution')
+    for case in cases:
+        result = plan(case.goal, case.start, mode='radial', seed=case.seed)
+        assert result.status is PlanStatus.NOT_REACHED, case.goal
+        assert 'goal ray' in result.message
+        assert result.radial_error_rad > 1e-6 or result.position_error_m > 1e-6
+
+
+@pytest.mark.parametrize('mode', ['free', 'radial'])
+def test_optima_on_a_joint_limit_are_found(mode: str) -> None:
+    arm = paper_arm()
+    for case in draw_cases(arm, 3, mode=Mode(mode), random_starts=True, seed=8,
+                           only='limit-optima'):
+        result = plan(case.goal, case.start, mode=mode, seed=case.seed)
+        assert result.success
+        assert result.motion_time_s == pytest.approx(case.exact_time, rel=1e-6)
+
+
+def test_equal_motion_times_go_to_the_least_joint_travel() -> None:
+    arm = paper_arm()
+    cases = draw_cases(arm, 12, mode=Mode.FREE, random_starts=False, seed=77)
+    tied = [c for c in cases if np.argmax(np.abs(c.exact.joint_goal - c.start[:4])) == 0]
+    assert len(tied) >= 3                 # the base joint is slowest: a whole arc ties
+    for case in tied:
+        result = plan(case.goal, case.start, seed=case.seed)
+        travel = np.abs(result.joint_goal[:4] - case.start[:4]).sum()
+        least = np.abs(case.exact.joint_goal - case.start[:4]).sum()
+        assert result.motion_time_s == pytest.approx(case.exact_time, rel=1e-9)
+        assert travel == pytest.approx(least, abs=1e-5)
+
+
+def test_a_bad_axis_tolerance_raises() -> None:
+    with pytest.raises(ValueError, match='axis_tolerance'):
+        plan(TARGET, mode='radial', axis_tolerance=0.0)

@@ -74,7 +74,8 @@ import numpy as np
 from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
-from trajplan_ros.planning.polish import curve_minima, polish as polish_candidates
+from trajplan_ros.planning.polish import polish as polish_candidates
+from trajplan_ros.planning.solution_curve import curve_seeds
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
@@ -294,11 +295,21 @@ def _restart(swarm: _Swarms, obj: Objective, rng: np.random.Generator, tol: floa
     return lost.size * population
 
 
-def _curve_search(swarm: _Swarms, obj: Objective, steps: int) -> None:
-    """Polish the motion-time minima along the best p_g's curve; keep a better one (ours)."""
+def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, probes: int,
+                  steps: int) -> None:
+    """
+    Polish the seeds along the solution curves (``solution_curve``); keep a better one (ours).
+
+    The curves are those through the best p_g and through ``probes`` points drawn inside the
+    limits.
+    """
     s = swarm.best_swarm()
     g = swarm.gbest_index[s]
-    seeds = curve_minima(obj, swarm.pbest[s, g])
+    best = swarm.pbest[s, g]
+    reached = swarm.pbest_err[s, g] <= obj.shaping.eps
+    points = np.concatenate((best[None, :],
+                             initial_population(rng, obj.lower, obj.upper, (probes,))))
+    seeds = curve_seeds(obj, points, best if reached else None)
     if not len(seeds):
         return
     found = polish_candidates(obj, seeds, max_steps=steps)
@@ -306,6 +317,23 @@ def _curve_search(swarm: _Swarms, obj: Objective, steps: int) -> None:
     i = int(np.argmin(ev.efficiency))
     if ev.efficiency[i] < swarm.pbest_f[s, g]:
         swarm.replace_gbest(s, found[i], ev.efficiency[i], ev.error[i])
+
+
+def _answer(swarm: _Swarms, obj: Objective) -> np.ndarray:
+    """
+    Return the run's answer among the swarms' p_g (ours).
+
+    That is the fastest one settled on the goal (error at most ``SETTLED``) and, among those
+    as fast to 1e-9, the one with the least total joint travel sum |x_i - start_i|; the one with
+    the least F when none has settled.
+    """
+    gbest = swarm.gbest
+    settled = swarm.pbest_err[swarm.rows, swarm.gbest_index] <= SETTLED
+    if not settled.any():
+        return gbest[swarm.best_swarm()]
+    time = np.where(settled, obj.motion_time(gbest), np.inf)
+    travel = np.abs(gbest - obj.start[: obj.arm.planned]).sum(axis=1)
+    return gbest[np.argmin(np.where(time <= time.min() * (1 + 1e-9), travel, np.inf))]
 
 
 @dataclass
@@ -352,7 +380,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
           seed: int | np.random.Generator | None = None, swarms: int | None = None,
           polish: bool = True, polish_period: int = 5, polish_count: int | None = None,
           polish_steps: int | None = None, agreement: int = 4, patience_rounds: int = 4,
-          restart: bool = True, curve_search: int = 15, elimination: float = 0.1,
+          restart: bool = True, curve_search: int = 16, elimination: float = 0.1,
           elimination_period: int = 5, inertia: tuple[float, float] = (0.9, 0.4),
           c1: float = 2.0, c2: float = 2.0, c3: tuple[float, float] = (2.0, 0.0),
           max_velocity: float = 0.2, interrupt: Interrupt | None = None) -> OptimizeResult:
@@ -393,8 +421,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             stop, reached = stopping.after_round(*swarm.best(), agree)
             if stop:
                 converged = reached
-                if reached and agree < curve_search:
-                    _curve_search(swarm, obj, polish_steps)
+                if curve_search:
+                    _curve_search(swarm, obj, rng, curve_search, polish_steps)
             elif restart:
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())
@@ -402,6 +430,4 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             converged = stop = True
         if stop or (interrupted := asked(interrupt)) is not None:
             break
-    s = swarm.best_swarm()
-    return history.result(obj, swarm.pbest[s, swarm.gbest_index[s]], nfev, converged,
-                          interrupted)
+    return history.result(obj, _answer(swarm, obj), nfev, converged, interrupted)

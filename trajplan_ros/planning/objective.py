@@ -8,11 +8,17 @@ max_i |q_i - q_start_i| / omega over the planned joints. S is the fuzzy rewards-
 term on the error (eq. 11, ``fuzzy.RewardPunishment``).
 
 Mode "free" constrains only the tool position. Mode "radial" adds the orientation constraint of
-eq. (12)-(13): the tool axis must make the angle eps = arccos(z . p / |z||p|) with the base z
-axis. For the paper's arm that is theta2 + theta3 + theta4 = +-eps (DH); written through the tool
-axis it holds for any chain. In radial mode the error fed to S combines both residuals,
-err = sqrt(|p - goal|^2 + (L (u_z - cos eps))^2), with L the arm's reach turning the
-dimensionless axis residual into metres.
+eq. (12)-(13): the tool sweeps from upright by eps = arccos(z . p / |z||p|) towards the goal, so
+its axis ends along the goal ray, pointing outward: u_tool = p / |p| (doc/paper.md). On the
+paper's arm that is theta2 + theta3 + theta4 = +eps (DH) with the base facing the goal and -eps
+with it turned away; written through the tool axis it holds for any chain. The axis error is the
+angle between u_tool and p / |p| (``axis_angle``; a tool pointing inward is an error of pi). In
+radial mode the error fed to S combines both, err = sqrt(|p - goal|^2 + (L angle)^2), with L
+the arm's reach turning radians into metres.
+
+The local polish needs the constraints as smooth residuals: the position residual p - goal and,
+in radial mode, the two components of u_tool across the goal ray (``residuals``), which vanish at
+u_tool = +-p / |p|; the angle tells the two apart.
 """
 from __future__ import annotations
 
@@ -25,7 +31,7 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
 from trajplan_ros.planning.fuzzy import RewardPunishment
 
-__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest']
+__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'goal_ray_basis']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -51,6 +57,19 @@ class Evaluation:
     error: np.ndarray           # constraint error fed to S (eq. 11), m
 
 
+def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
+    """
+    Return the goal ray p / |p| and two unit vectors across it, as the rows of a 3x3 matrix.
+
+    The first vector across is horizontal (z x p normalised; x on the z axis).
+    """
+    ray = goal / np.linalg.norm(goal)
+    across = np.cross((0.0, 0.0, 1.0), ray)
+    size = np.linalg.norm(across)
+    across = across / size if size > 1e-12 else np.array([1.0, 0.0, 0.0])
+    return np.stack((ray, across, np.cross(ray, across)))
+
+
 class Objective:
     """F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary)."""
 
@@ -73,8 +92,8 @@ class Objective:
         self.upper = arm.upper[:m].copy()
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
         self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
-        self.axis_target = (float(self.goal[2] / np.linalg.norm(self.goal)) if self.radial
-                            else 0.0)
+        #: Rows: the goal ray, then two unit vectors across it (radial mode only).
+        self.ray_basis = goal_ray_basis(self.goal) if self.radial else np.eye(3)
         self._tail = arm.held_tail(self.start)
 
     @property
@@ -130,21 +149,34 @@ class Objective:
         return self.arm.tool_jacobian(x, tail=self._tail)
 
     def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Return the residuals p - goal, and u_z - cos eps in radial mode, (N, 3) or (N, 4)."""
-        r = p - self.goal
-        if self.radial:
-            r = np.concatenate((r, (u[:, 2:3] - self.axis_target)), axis=1)
-        return r
+        """
+        Return the constraint residuals, (N, 3) or in radial mode (N, 5).
+
+        They are p - goal and, in radial mode, the components of u across the goal ray (zero
+        where u = +-p / |p|; see the module docstring).
+        """
+        return self.linear_residuals(p - self.goal, u)
+
+    def linear_residuals(self, dp: np.ndarray, du: np.ndarray) -> np.ndarray:
+        """
+        Return the change of the residuals for changes dp, du (N, 3) of the tool point and axis.
+
+        The residuals are linear in p and u, so this also maps their derivatives.
+        """
+        return np.concatenate((dp, du @ self.ray_basis[1:].T), axis=1) if self.radial else dp
+
+    def axis_angle(self, u: np.ndarray) -> np.ndarray:
+        """Return the angle (rad) between each tool axis u (N, 3) and the goal ray p / |p|."""
+        along = u @ self.ray_basis[0]
+        across = np.linalg.norm(u @ self.ray_basis[1:].T, axis=1)
+        return np.arctan2(across, along)
 
     def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Return the error of eq. (11), plus the axis residual in radial mode (see the module)."""
-        return self.residual_norm(self.residuals(p, u))
-
-    def residual_norm(self, r: np.ndarray) -> np.ndarray:
-        """Return the error (m) of residuals r (N, 3 or 4), the axis one scaled by the reach."""
-        sq = np.einsum('ij,ij->i', r[:, :3], r[:, :3])
+        """Return the error of eq. (11), plus the axis angle in radial mode (see the module)."""
+        d = p - self.goal
+        sq = np.einsum('ij,ij->i', d, d)
         if self.radial:
-            sq = sq + (self.arm.reach * r[:, 3]) ** 2
+            sq = sq + (self.arm.reach * self.axis_angle(u)) ** 2
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:

@@ -31,7 +31,8 @@ from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode,
 from trajplan_ros.planning.optimize import Interrupt, OptimizeResult
 from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
 
-__all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_TOLERANCE']
+__all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_AXIS_TOLERANCE',
+           'DEFAULT_TOLERANCE']
 
 #: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
 ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
@@ -39,6 +40,8 @@ ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
 }
 #: Largest error (m) that counts as reached unless the caller says otherwise.
 DEFAULT_TOLERANCE = 1e-6
+#: Largest angle (rad) between the tool axis and the goal ray that counts as radial.
+DEFAULT_AXIS_TOLERANCE = 1e-6
 #: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
 _clock: Callable[[], float] = time.monotonic
 
@@ -46,8 +49,8 @@ _clock: Callable[[], float] = time.monotonic
 class PlanStatus(str, Enum):
     """How a planning request ended."""
 
-    SUCCEEDED = 'succeeded'        # reached within tolerance
-    NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal
+    SUCCEEDED = 'succeeded'        # reached within tolerance (and radial within axis_tolerance)
+    NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal or the ray
     REJECTED = 'rejected'          # refused before optimisation (bad goal or start)
     TIMED_OUT = 'timed_out'        # ended at max_planning_time, with the best answer so far
     CANCELLED = 'cancelled'        # ended by the caller's stop hook, with the best answer so far
@@ -63,7 +66,7 @@ class PlanResult:
     start: np.ndarray | None
     joint_goal: np.ndarray | None = None
     position_error_m: float = float('nan')
-    radial_error_rad: float = float('nan')
+    radial_error_rad: float = float('nan')        # angle of the tool axis to the goal ray
     motion_time_s: float = float('nan')
     efficiency: float = float('nan')
     iterations: int = 0
@@ -113,7 +116,7 @@ class PlanResult:
 def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = 'iepso',
          omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
-         seed: int | np.random.Generator | None = None, population: int = 40,
+         axis_tolerance: float = DEFAULT_AXIS_TOLERANCE, seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
          options: dict[str, Any] | None = None, max_planning_time: float | None = None,
          stop: Callable[[], bool] | None = None) -> PlanResult:
@@ -127,11 +130,14 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param goal: tool position (x, y, z) in metres.
     :param start: all joint angles now (rad); default the upright pose q = 0.
     :param arm: the arm model; default ``paper_arm()``.
-    :param mode: "free" (position only) or "radial" (eq. 12-13 orientation constraint too).
+    :param mode: "free" (position only) or "radial" (eq. 12-13: the tool axis along the goal
+        ray, pointing outward, too).
     :param algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga",
         "de".
     :param omega: servo angular velocity (rad/s) of eq. (10).
-    :param tolerance: largest error (m) that counts as reached.
+    :param tolerance: largest position error (m) that counts as reached.
+    :param axis_tolerance: in radial mode, largest angle (rad) between the tool axis and the
+        goal ray that counts as radial.
     :param seed: random seed; the same seed gives the same answer, bit for bit.
     :param population: swarm (or population) size.
     :param max_iter: iteration cap.
@@ -143,7 +149,7 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     """
     arm = arm if arm is not None else paper_arm()
     mode = Mode(mode)
-    _check_settings(algorithm, tolerance, max_planning_time, stop)
+    _check_settings(algorithm, (tolerance, axis_tolerance), max_planning_time, stop)
     clock = time.perf_counter()
     interrupt = _interrupt(max_planning_time, stop)
     goal_arr = np.asarray(goal, dtype=float).ravel()
@@ -155,16 +161,27 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
                                   seed=seed, interrupt=interrupt, **(options or {}))
-    return _outcome(obj, found, (tolerance, max_planning_time), clock, common)
+    return _outcome(obj, found, _Limits(tolerance, axis_tolerance, max_planning_time), clock,
+                    common)
 
 
-def _check_settings(algorithm: str, tolerance: float, max_planning_time: float | None,
-                    stop: Callable[[], bool] | None) -> None:
+@dataclass(frozen=True)
+class _Limits:
+    """What a search must reach, and its time limit."""
+
+    tolerance: float
+    axis_tolerance: float
+    max_planning_time: float | None
+
+
+def _check_settings(algorithm: str, tolerances: tuple[float, float],
+                    max_planning_time: float | None, stop: Callable[[], bool] | None) -> None:
     """Raise ValueError for an unknown algorithm or a bad tolerance or time limit."""
     if algorithm not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
-    if not (np.isfinite(tolerance) and tolerance > 0):
-        raise ValueError(f'tolerance must be finite and positive, got {tolerance}')
+    for name, value in zip(('tolerance', 'axis_tolerance'), tolerances):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f'{name} must be finite and positive, got {value}')
     if max_planning_time is not None and not (np.isfinite(max_planning_time)
                                               and max_planning_time > 0):
         raise ValueError('max_planning_time must be None or finite and positive, '
@@ -194,34 +211,37 @@ def _interrupt(max_planning_time: float | None,
     return interrupt
 
 
-def _status(found: OptimizeResult, limits: tuple[float, float | None],
-            pos_err: float) -> tuple[PlanStatus, str]:
-    """Return the status of a search and its one-line reason; ``limits``: tolerance, time."""
-    tolerance, max_planning_time = limits
+def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
+            axis_err: float) -> tuple[PlanStatus, str]:
+    """Return the status of a search and its one-line reason (axis_err NaN in free mode)."""
     if found.interrupted == PlanStatus.TIMED_OUT:
         return PlanStatus.TIMED_OUT, (f'planning ran past max_planning_time '
-                                      f'{max_planning_time:g} s; best position error '
+                                      f'{limits.max_planning_time:g} s; best position error '
                                       f'{pos_err:.3g} m')
     if found.interrupted == PlanStatus.CANCELLED:
         return PlanStatus.CANCELLED, 'planning stopped before the end'
-    if found.error <= tolerance:
-        return (PlanStatus.SUCCEEDED,
-                f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m')
-    return PlanStatus.NOT_REACHED, (f'goal not reached: best error {found.error:.3g} m is above '
-                                    f'the tolerance {tolerance:.3g} m')
+    axis = '' if np.isnan(axis_err) else f', axis {axis_err:.3g} rad from the goal ray'
+    if pos_err > limits.tolerance:
+        return PlanStatus.NOT_REACHED, (f'goal not reached: best position error {pos_err:.3g} m '
+                                        f'is above the tolerance {limits.tolerance:.3g} m{axis}')
+    if axis_err > limits.axis_tolerance:
+        return PlanStatus.NOT_REACHED, (
+            f'no radial pose found: the best tool axis is {axis_err:.3g} rad from the goal ray '
+            f'(axis_tolerance {limits.axis_tolerance:.3g} rad), position error {pos_err:.3g} m')
+    return (PlanStatus.SUCCEEDED,
+            f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m{axis}')
 
 
-def _outcome(obj: Objective, found: OptimizeResult, limits: tuple[float, float | None],
-             clock: float, common: dict[str, Any]) -> PlanResult:
+def _outcome(obj: Objective, found: OptimizeResult, limits: _Limits, clock: float,
+             common: dict[str, Any]) -> PlanResult:
     """Return the result of a search: the joint goal, its errors, the status and a message."""
     joint_goal = obj.full(found.x)[0]
     p, u = obj.arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
-    radial_err = (float(abs(np.arccos(np.clip(u[0, 2], -1, 1)) - np.arccos(obj.axis_target)))
-                  if obj.radial else float('nan'))
-    status, message = _status(found, limits, pos_err)
+    axis_err = float(obj.axis_angle(u)[0]) if obj.radial else float('nan')
+    status, message = _status(found, limits, pos_err, axis_err)
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
-        radial_error_rad=radial_err, motion_time_s=found.motion_time, efficiency=found.fun,
+        radial_error_rad=axis_err, motion_time_s=found.motion_time, efficiency=found.fun,
         iterations=found.nit, evaluations=found.nfev, plan_time_s=time.perf_counter() - clock,
         history_efficiency=found.history_fun, history_error=found.history_error, **common)

@@ -17,13 +17,16 @@ the straight line; the exact second derivative of the kinematics gives that curv
 The motion time, the largest of those |parabolas|, is minimised over z exactly by checking every
 candidate point (vertices of the max, stationary points, zeros, bounds). That converges fast
 both where two joints tie and where one joint's displacement is at a smooth minimum. Ties
-(every joint but the slowest has slack) go to the least total joint travel, which makes plans
-repeatable. With more than one null direction (arms with more than four planned joints) the
-directions are taken in turn, a coordinate descent that may stop short of the optimum.
-A trust radius, a second-order correction and the merit R + W |c| make the steps safe.
+(a stretch of solutions along which the slowest joint does not move, so R stays the same) go
+to the least total joint travel sum |x_i - start_i|: the line search also checks where the
+travel is least, and the merit omega R + 1e-6 travel + W |c| accepts a step that lowers the
+travel at the same R. That makes plans repeatable. With more than one null direction (arms with
+more than four planned joints) the directions are taken in turn, a coordinate descent that may
+stop short of the optimum. A trust radius, a second-order correction and the merit make the
+steps safe.
 
 Being local, the polish cannot see a faster solution elsewhere on the curve of solutions
-through its answer; ``curve_minima`` follows that curve and returns seeds for another polish.
+through its answer, or on another curve; ``solution_curve`` follows them and seeds the polish.
 """
 from __future__ import annotations
 
@@ -34,9 +37,12 @@ import numpy as np
 
 from trajplan_ros.planning.objective import Objective
 
-__all__ = ['polish', 'curve_minima']
+__all__ = ['Linearisation', 'polish']
 
 _TIE = 1e-12
+#: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
+#: between steps that leave the motion time as it is (ties, see ``polish``).
+_TRAVEL_WEIGHT = 1e-6
 
 
 @functools.lru_cache(maxsize=8)
@@ -69,9 +75,12 @@ def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
     qa = np.concatenate((at[iu] - at[ju], at[iu] + at[ju], at))
     qb = np.concatenate((nt[iu] - nt[ju], nt[iu] + nt[ju], nt))
     qc = np.concatenate((bt[iu] - bt[ju], bt[iu] + bt[ju], bt))
+    side = np.where(bt != 0.0, np.sign(bt), np.sign(nt))      # the signs of the q_i at z = 0
     with np.errstate(divide='ignore', invalid='ignore'):
-        cand = np.concatenate((*_roots(qa, qb, qc), -nt / (2.0 * at), zlo[None], zhi[None],
-                               np.zeros((1, b.shape[0]))))                # (C, K)
+        # vertices, zeros, stationary points of each |q_i| and of the total travel, the bounds
+        least_travel = -(side * nt).sum(axis=0) / (2.0 * (side * at).sum(axis=0))
+        cand = np.concatenate((*_roots(qa, qb, qc), -nt / (2.0 * at), least_travel[None],
+                               zlo[None], zhi[None], np.zeros((1, b.shape[0]))))  # (C, K)
     cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo, zhi)
     d = np.abs(bt[:, None, :] + (nt[:, None, :] + at[:, None, :] * cand) * cand)   # (m, C, K)
     worst = functools.reduce(np.maximum, d)      # faster than reductions over a short axis 0
@@ -101,7 +110,7 @@ def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
     return obj.residuals(*obj.tool(x))
 
 
-class _Linearisation:
+class Linearisation:
     """
     The constraints c(x) linearised at K candidates x, with what a polish step needs.
 
@@ -121,10 +130,12 @@ class _Linearisation:
         d = obj.tool_jacobian(x)
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
-        self.error = obj.residual_norm(self.c)
-        self.merit = (self.time * obj.omega
+        self.error = obj.errors(d.p, d.u)
+        travel = np.abs(x - obj.start[: obj.arm.planned]).sum(axis=1)
+        self.merit = (self.time * obj.omega + _TRAVEL_WEIGHT * travel
                       + weight * np.sqrt(np.einsum('kr,kr->k', self.c, self.c)))
-        jac = np.concatenate((d.jp, d.ju[:, 2:3]), axis=1) if obj.radial else d.jp
+        jac = (np.concatenate((d.jp, obj.ray_basis[1:] @ d.ju), axis=1) if obj.radial
+               else d.jp)
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)
         gram = jac @ jt if rows <= dim else jt @ jac
@@ -146,14 +157,14 @@ class _Linearisation:
         self.half_curv = np.zeros_like(self.null)
         for j in range(self.null.shape[1] if curvature else 0):
             p2, u2 = d.curvature(self.null[:, j, :])
-            c2 = np.concatenate((p2, u2[:, 2:3]), axis=1) if obj.radial else p2
+            c2 = obj.linear_residuals(p2, u2)
             self.half_curv[:, j, :] = 0.5 * self.newton(c2)
 
     def newton(self, res: np.ndarray) -> np.ndarray:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
         return -(self.pinv @ res[:, :, None])[:, :, 0]
 
-    def keep(self, other: '_Linearisation', mask: np.ndarray) -> None:
+    def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
         for name in ('c', 'time', 'error', 'merit', 'pinv', 'null', 'half_curv'):
             mine, theirs = getattr(self, name), getattr(other, name)
@@ -177,7 +188,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
     # multiplier of this problem, so that the merit's minimum is the constrained one.
     weight = 1e3 / obj.arm.reach
-    here = _Linearisation(obj, x, weight)
+    here = Linearisation(obj, x, weight)
     delta = np.full(k, trust)
     live = np.ones(k, dtype=bool)
     for _ in range(max_steps):
@@ -200,7 +211,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         trial = np.clip(base, lo, hi)
         # second-order correction
         trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)
-        there = _Linearisation(obj, trial, weight)
+        there = Linearisation(obj, trial, weight)
         moved = np.einsum('km,km->k', trial - x, trial - x)
         accept = live & (there.merit < here.merit)
         x[accept] = trial[accept]
@@ -211,72 +222,3 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
                               and enough(here.time, here.error, delta >= trust / 5)):
             break
     return x
-
-
-def _follow(obj: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray:
-    """
-    Sample the curve of solutions of obj's constraints through x (one null direction).
-
-    Returns (2 steps + 1, planned) samples in order along the curve, with x in the middle.
-
-    ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
-    Newton correction), straight through the joint limits (angles wrapped to [-pi, pi)).
-    """
-    ends = np.stack((x, x)).astype(float)
-    here = _Linearisation(obj, ends, 1.0, curvature=False)
-    direction = here.null[:, 0, :] * np.array([[1.0], [-1.0]])     # both ways along the curve
-    path = []
-    for _ in range(steps):
-        ends = ends + direction * step
-        here = _Linearisation(obj, ends, 1.0, curvature=False)
-        ends = ends + here.newton(here.c)
-        turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
-        direction = here.null[:, 0, :] * turn[:, None]
-        path.append(np.mod(ends + np.pi, 2 * np.pi) - np.pi)
-    return np.concatenate((np.stack(path[::-1])[:, 1], x[None, :], np.stack(path)[:, 0]))
-
-
-def curve_minima(obj: Objective, x: np.ndarray, *, step: float = 0.4,
-                 steps: int = 18) -> np.ndarray:
-    """
-    Return seeds for ``polish`` on the curve through the solution x (planned,).
-
-    The seeds may lead to faster solutions than x; there are none when there is no such curve.
-
-    * With one null direction (free mode with four planned joints, radial mode with five) the
-      solutions through x form a curve. Joint limits cut it into arcs, and the motion time
-      along it can have several local minima that a polish from x cannot see: the seeds are
-      the in-limit samples (x excluded) whose motion time is no larger than that of their
-      neighbours.
-    * Where radial solutions are isolated (four planned joints) the solutions of the position
-      constraint alone form that curve, and the other radial solutions on it are where the axis
-      residual changes sign: the seeds are the in-limit samples next to each change, the closer
-      one of each pair.
-
-    The curve is followed by ``_follow``; a seed must not be slower than x by more than
-    step / omega, as no solution within half a step of it could then be faster than x.
-    """
-    free = x.size - (4 if obj.radial else 3)           # null directions: joints - constraints
-    if free == 1:
-        curve = obj
-    elif free == 0 and obj.radial:
-        curve = Objective(obj.arm, obj.goal, obj.start, omega=obj.omega)      # position only
-    else:
-        return np.empty((0, x.size))
-    along = _follow(curve, x, step, steps)
-    inside = np.all((along >= obj.lower) & (along <= obj.upper), axis=1)
-    p, u = obj.tool(along)
-    near = curve.errors(p, u) <= 1e-2 * obj.arm.reach
-    time = np.where(inside & near, obj.motion_time(along), np.inf)
-    if curve is not obj:
-        axis = obj.residuals(p, u)[:, 3]
-        change = np.flatnonzero(np.sign(axis[:-1]) != np.sign(axis[1:]))
-        closer = change + (np.abs(axis[change + 1]) < np.abs(axis[change]))
-        seeds = np.zeros(time.size, dtype=bool)
-        seeds[closer] = True
-    else:
-        padded = np.concatenate(([np.inf], time, [np.inf]))
-        seeds = (time <= padded[:-2]) & (time <= padded[2:])
-    seeds[steps] = False                                             # x itself
-    seeds &= time < time[steps] + step / obj.omega
-    return along[seeds]

@@ -76,43 +76,65 @@ def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.
     return np.where(inside, t, np.inf)
 
 
+def _zoom(arm: ArmModel, goal: np.ndarray, start: np.ndarray, omega: float,
+          sweep: tuple[np.ndarray, np.ndarray], zoom_levels: int,
+          tmin: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Zoom in from ``sweep`` (phi samples, their times) on the least time; return q and times.
+
+    With ``tmin``, zoom in on the least total joint travel among the samples whose time ties
+    with ``tmin`` instead.
+    """
+    phis, step = sweep[0], sweep[0][1] - sweep[0][0]
+    q, t = sweep[1], _times(arm, sweep[1], start, omega)
+    for _ in range(zoom_levels):
+        if tmin is not None:
+            t = np.where(t <= tmin * (1 + 1e-12) + 1e-15, np.abs(q - start[:4]).sum(axis=-1),
+                         np.inf)
+        t = t.min(axis=1)
+        finite = np.isfinite(t)
+        if not finite.any():
+            break
+        best = phis[finite][np.argsort(t[finite])[:16]]
+        step /= 50.0
+        phis = np.unique((best[:, None] + np.arange(-100, 101)[None, :] * step).ravel())
+        q = _solutions(arm, goal, phis)
+        t = _times(arm, q, start, omega)
+    q = q.reshape(-1, 4)
+    return q, _times(arm, q, start, omega)
+
+
 def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
-                  mode: str = 'free', samples: int = 20001, zoom_levels: int = 5) -> ExactOptimum:
+                  mode: str = 'free', zoom_levels: int = 5) -> ExactOptimum:
     """
     Return the least R = max|q - start| / omega over in-limit q that reach ``goal`` exactly.
 
-    mode "free": sweep phi over [-pi, pi]; mode "radial": phi is fixed by eq. (12)-(13) to
-    +-radial_angle(goal) (the tool axis at the goal's polar angle from the base z axis).
-    Ties are broken by the least total joint travel, as the planner does.
+    mode "free": sweep phi over [-pi, pi]; mode "radial": the tool axis along the goal ray
+    (eq. 12-13, doc/paper.md), so phi = +radial_angle(goal) on the base branch facing the goal
+    and -radial_angle(goal) on the one turned away. Among configurations that tie at the least
+    R (relative 1e-12), the one with the least total joint travel sum |q_i - start_i| is
+    returned, as the planner does: in free mode, where a whole arc of the solutions ties (the
+    slowest joint does not move along it), by a second zoom over the tied samples.
     """
     _check_family(arm)
     goal = np.asarray(goal, dtype=float)
     start = np.asarray(start, dtype=float)
     if mode == 'radial':
-        eps = radial_angle(goal)
-        phis = np.array([eps, -eps])
-        q = _solutions(arm, goal, phis).reshape(-1, 4)
+        both = _solutions(arm, goal, np.array([radial_angle(goal), -radial_angle(goal)]))
+        q = np.concatenate((both[0, :2], both[1, 2:]))       # facing: +eps; turned: -eps
         t = _times(arm, q, start, omega)
     elif mode == 'free':
-        phis = np.linspace(-np.pi, np.pi, samples)
-        step = phis[1] - phis[0]
-        for _ in range(zoom_levels):
-            q = _solutions(arm, goal, phis)
-            t = _times(arm, q, start, omega).min(axis=1)
-            finite = np.isfinite(t)
-            if not finite.any():
-                break
-            best = phis[finite][np.argsort(t[finite])[:16]]
-            step /= 50.0
-            offsets = np.arange(-100, 101) * step
-            phis = np.unique((best[:, None] + offsets[None, :]).ravel())
-        q = _solutions(arm, goal, phis).reshape(-1, 4)
-        t = _times(arm, q, start, omega)
+        phis = np.linspace(-np.pi, np.pi, 20001)
+        sweep = (phis, _solutions(arm, goal, phis))
+        q, t = _zoom(arm, goal, start, omega, sweep, zoom_levels)
+        tmin = float(t.min())
+        if np.count_nonzero(_times(arm, sweep[1], start, omega) <= tmin * (1 + 1e-9)) > 1:
+            q2, t2 = _zoom(arm, goal, start, omega, sweep, zoom_levels, tmin)   # a tied arc
+            q, t = np.concatenate((q, q2)), np.concatenate((t, t2))
     else:
         raise ValueError(f"mode must be 'free' or 'radial', got {mode!r}")
     if not np.isfinite(t).any():
         return ExactOptimum(np.inf, np.full(4, np.nan))
-    tmin = t.min()
-    tied = np.flatnonzero(t <= tmin * (1 + 1e-12) + 1e-15)
+    tied = np.flatnonzero(t <= t.min() * (1 + 1e-12) + 1e-15)
     travel = np.abs(q[tied] - start[:4]).sum(axis=1)
-    return ExactOptimum(float(tmin), q[tied[np.argmin(travel)]].copy())
+    return ExactOptimum(float(t[tied].min()), q[tied[np.argmin(travel)]].copy())

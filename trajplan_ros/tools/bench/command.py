@@ -23,7 +23,7 @@ from typing import Sequence
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning.objective import Mode
 from trajplan_ros.tools.arguments import positive_count, UsageError
-from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case
+from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
@@ -70,6 +70,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--mode', choices=[m.value for m in Mode], default=Mode.FREE.value)
     p.add_argument('--random-starts', action='store_true',
                    help='start from random in-limit configurations instead of q = 0')
+    p.add_argument('--only', choices=DRAWS, default='all',
+                   help='draw only goals whose exact optimum has a joint on a limit, or only '
+                        'goals without a solution (success: reported not reached); default all')
     p.add_argument('--seed', type=int, default=0,
                    help='seed of the goals, starts and plans (default 0)')
     p.add_argument('--csv', metavar='FILE', help='also write the table as CSV')
@@ -97,17 +100,21 @@ def _chosen_methods(args: argparse.Namespace) -> tuple[list[Method], list[str]]:
 def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
     """Return the cases the options ask for, after printing the line that says what they are."""
     if args.paper:
-        if args.goals or args.quick or args.random_starts:
-            raise UsageError('--paper is one fixed target: use --runs, not --goals, --quick or '
-                             '--random-starts')
+        if args.goals or args.quick or args.random_starts or args.only != 'all':
+            raise UsageError('--paper is one fixed target: use --runs, not --goals, --quick, '
+                             '--random-starts or --only')
         first = paper_case(arm, mode, args.seed)
         print(format_paper_heading(mode, args.seed, args.runs))
         return [replace(first, seed=args.seed + r) for r in range(args.runs)]
     if args.runs != 1:
         raise UsageError('--runs goes with --paper; on random goals use --goals')
     n = args.goals or (QUICK_GOALS if args.quick else DEFAULT_GOALS)
-    cases = draw_cases(arm, n, mode=mode, random_starts=args.random_starts, seed=args.seed)
-    print(format_goals_heading(n, mode, args.random_starts, args.seed))
+    try:
+        cases = draw_cases(arm, n, mode=mode, random_starts=args.random_starts, seed=args.seed,
+                           only=args.only)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(format_goals_heading(n, mode, args.random_starts, args.seed, args.only))
     return cases
 
 

@@ -18,7 +18,8 @@ from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode, Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TABLE5, PAPER_TARGET
 from trajplan_ros.tools.bench.cases import Case
-from trajplan_ros.tools.bench.runner import Results, SUCCESS_ERROR, SUCCESS_GAP
+from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCESS_ERROR,
+                                             SUCCESS_GAP)
 
 __all__ = ['Summary', 'summarise', 'format_criteria', 'format_failures', 'format_goals_heading',
            'format_paper', 'format_paper_heading', 'format_summary', 'write_plans_csv',
@@ -73,11 +74,16 @@ def _ratio(value: float) -> str:
     return '-' if not np.isfinite(value) else f'{value:.1f}x'
 
 
-def format_goals_heading(n: int, mode: Mode, random_starts: bool, seed: int) -> str:
+_KINDS = {'all': '', 'limit-optima': ' with the exact optimum on a joint limit',
+          'no-solution': ' without a solution'}
+
+
+def format_goals_heading(n: int, mode: Mode, random_starts: bool, seed: int,
+                         only: str = 'all') -> str:
     """Return the first line of a run on random goals."""
     starts = 'random in-limit starts' if random_starts else 'starts upright (q = 0)'
-    return (f"trajplan bench: {n} goal{'s' * (n != 1)}, {mode.value} mode, {starts}, "
-            f'seed {seed}; every method gets the same goals, starts and seeds.')
+    return (f"trajplan bench: {n} goal{'s' * (n != 1)}{_KINDS[only]}, {mode.value} mode, "
+            f'{starts}, seed {seed}; every method gets the same goals, starts and seeds.')
 
 
 def format_paper_heading(mode: Mode, seed: int, runs: int) -> str:
@@ -88,15 +94,17 @@ def format_paper_heading(mode: Mode, seed: int, runs: int) -> str:
 
 def format_criteria() -> str:
     """Return the line that says what success and time mean."""
-    return (f'success = error <= {SUCCESS_ERROR:g} m and motion time within '
-            f'{100 * SUCCESS_GAP:g} % of the exact minimum; time = wall time per plan.')
+    return (f'success = error <= {SUCCESS_ERROR:g} m (radial: axis within {SUCCESS_AXIS_ERROR:g} '
+            f'rad of the goal ray) and motion time within {100 * SUCCESS_GAP:g} % of the exact '
+            'minimum; on goals without a solution: reported not reached. '
+            'time = wall time per plan.')
 
 
 def format_summary(rows: Sequence[Summary]) -> str:
     """Lay out the summary rows as the benchmark table."""
     headers = ('method', 'success', 'median error (m)', 'worst error (m)', 'median gap',
                'median time (ms)', 'p99 time (ms)', 'time / iepso')
-    body = [(s.method, f'{100 * s.success_rate:.1f} %', f'{s.median_error_m:.1e}',
+    body = [(s.method, f'{100 * s.success_rate:.2f} %', f'{s.median_error_m:.1e}',
              f'{s.worst_error_m:.1e}', _percent(s.median_gap, 3), f'{1e3 * s.median_time_s:.1f}',
              f'{1e3 * s.p99_time_s:.1f}', _ratio(s.time_ratio_to_iepso)) for s in rows]
     return _table(headers, body)
@@ -113,9 +121,10 @@ def format_failures(results: dict[str, Results], cases: Sequence[Case], limit: i
         shown = failed if limit < 0 else failed[:limit]
         for k in shown:
             case = cases[k]
+            status = '' if r.plans[k] is None else f'  {r.plans[k].status.value}'
             lines.append(f'  goal {_vector(case.goal)} m  start {_vector(case.start, 3)} rad  '
                          f'seed {case.seed}  error {r.error[k]:.2e} m  '
-                         f'gap {_percent(r.gap[k], 3)}')
+                         f'axis {r.axis_error[k]:.2e} rad  gap {_percent(r.gap[k], 3)}{status}')
         if shown.size < failed.size:
             lines.append(f'  ... {failed.size - shown.size} more (--failures -1 lists all, '
                          '--plans-csv FILE writes every plan)')
@@ -196,7 +205,7 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
     header = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
               + [f'start_q{i + 1}_rad' for i in range(n_joints)]
               + [f'q{i + 1}_rad' for i in range(planned)]
-              + ['error_m', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
+              + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
                  'success'])
     with open(path, 'w', newline='', encoding='utf-8') as handle:
         writer = csv.writer(handle)
@@ -204,5 +213,5 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
         for name, r in results.items():
             for k, case in enumerate(cases):
                 writer.writerow([name, k, case.seed, *case.goal, *case.start, *r.x[k], r.error[k],
-                                 r.motion_time[k], case.exact_time, r.gap[k], r.efficiency[k],
+                                 r.axis_error[k], r.motion_time[k], case.exact_time, r.gap[k], r.efficiency[k],
                                  r.seconds[k], bool(r.success[k])])

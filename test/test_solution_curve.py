@@ -1,0 +1,97 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""The curve of solutions: which curve, following it, its limit crossings and the seeds."""
+import numpy as np
+import pytest
+
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning.iepso import iepso
+from trajplan_ros.planning.objective import Mode, Objective
+from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
+from trajplan_ros.planning.reference import exact_minimum
+from trajplan_ros.planning.solution_curve import (_limit_crossings, curve_constraint,
+                                                  curve_seeds, follow)
+
+ARM = paper_arm()
+SIX = ArmModel(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0], alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
+               d=[0.2, 0, 0, 0.15, 0, 0.1], lower=np.full(6, -2.6), upper=np.full(6, 2.6))
+
+
+def test_the_curve_is_the_one_with_one_free_direction() -> None:
+    free = Objective(ARM, TARGET, np.zeros(5))
+    assert curve_constraint(free) is free                       # 4 joints, 3 equations
+    radial = curve_constraint(Objective(ARM, TARGET, np.zeros(5), mode='radial'))
+    assert radial is not None and radial.mode is Mode.FREE      # isolated: the position curve
+    goal = SIX.tool(np.full((1, 6), 0.3))[0][0]
+    assert curve_constraint(Objective(SIX, goal, np.zeros(6))) is None     # a 3-D set
+    six_radial = Objective(SIX, goal, np.zeros(6), mode='radial')
+    assert curve_constraint(six_radial) is six_radial           # 6 joints, 5 equations
+
+
+def test_follow_walks_along_the_solutions_both_ways() -> None:
+    obj = Objective(ARM, TARGET, np.zeros(5))
+    x = exact_minimum(ARM, TARGET, np.zeros(5)).joint_goal
+    along = follow(obj, x[None, :], 0.3, 6)
+    assert along.shape == (1, 13, 4)
+    np.testing.assert_array_equal(along[0, 6], x)
+    p, u = obj.tool(along[0])
+    assert np.all(obj.errors(p, u) < 1e-3)                      # one Newton step per sample
+    gaps = np.linalg.norm(np.diff(along[0], axis=0), axis=1)
+    assert np.all((gaps > 0.2) & (gaps < 0.4))                  # evenly spaced, in order
+
+
+def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> None:
+    obj = Objective(ARM, TARGET, np.zeros(5))
+    lo, hi = obj.lower, obj.upper
+    a = np.array([[lo[0] - 0.1, 0, 0, 0], [0, 0, 0, 0], [lo[0] - 0.2, 0, 0, 0]])
+    b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.1, 0, 0, 0]])
+    enter, leave = _limit_crossings(obj, a, b)
+    np.testing.assert_allclose(enter[0], [lo[0], 0, 0, 0])      # enters at the limit
+    np.testing.assert_allclose(leave[0], b[0])
+    np.testing.assert_allclose(np.stack((enter[1], leave[1])), np.stack((a[1], b[1])))
+    assert np.all(np.isnan(enter[2])) and np.all(np.isnan(leave[2]))      # never inside
+    # through the wrap at -pi/pi: the chord is the short way round, outside q1's limits
+    wrap = _limit_crossings(obj, np.array([[3.0, 0, 0, 0]]), np.array([[-3.0, 0, 0, 0]]))
+    assert np.all(np.isnan(wrap))
+
+
+#: Goals and starts (tuning seeds of ``trajplan bench``) whose fastest solution lies on a base
+#: branch or an arc of the solutions that no swarm visited: the joint on its limit, if any.
+OTHER_BRANCH_CASES = [
+    ('free', [0.12738613, 0.20380169, 0.14904285],
+     [-1.0429372, -1.49723571, 1.49739749, -1.880302, 1.77714611], 1289892025, 1),
+    ('radial', [0.04738548, 0.17046111, -0.14734109], [0.0] * 5, 1665007896, None),
+    ('radial', [-0.03615242, 0.03402082, 0.21869754],
+     [0.22117236, 0.24818829, 2.24474844, -0.0180555, -0.33749939], 1860722710, None),
+]
+
+
+@pytest.mark.parametrize('mode, goal, start, seed, on_limit', OTHER_BRANCH_CASES)
+def test_the_curve_search_finds_solutions_no_swarm_visited(mode, goal, start, seed,
+                                                          on_limit) -> None:
+    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
+    without = iepso(obj, seed=seed, curve_search=0)
+    assert without.motion_time > ref.motion_time_s * 1.01 or without.error > 1e-6
+    res = iepso(obj, seed=seed)
+    assert res.error <= 1e-9
+    assert res.motion_time == pytest.approx(ref.motion_time_s, rel=1e-6)
+    if on_limit is not None:
+        assert min(abs(res.x[on_limit] - ARM.lower[on_limit]),
+                   abs(res.x[on_limit] - ARM.upper[on_limit])) < 1e-9
+
+
+def test_seeds_are_in_limit_points_near_the_curves_and_distinct() -> None:
+    mode, goal, start, seed, _ = OTHER_BRANCH_CASES[0]
+    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    probes = np.random.default_rng(0).uniform(obj.lower, obj.upper, (16, 4))
+    seeds = curve_seeds(obj, probes, None)
+    assert len(seeds) >= 2
+    assert np.all((seeds >= obj.lower) & (seeds <= obj.upper))
+    assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
+    apart = np.max(np.abs(seeds[:, None] - seeds[None]), axis=2)[np.triu_indices(len(seeds), 1)]
+    assert np.all(apart >= 0.25)                                  # one seed per minimum
+    assert len(curve_seeds(obj, probes, seeds[0])) < len(seeds)   # only where faster
+    goal6 = SIX.tool(np.full((1, 6), 0.3))[0][0]
+    free6 = Objective(SIX, goal6, np.zeros(6))
+    assert curve_seeds(free6, np.full((1, 6), 0.3), None).shape == (0, 6)
