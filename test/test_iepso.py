@@ -97,11 +97,11 @@ RADIAL_CURVE_CASES = [
 @pytest.mark.parametrize('goal, start, seed, mode',
                          [(*case, 'free') for case in CURVE_CASES]
                          + [(*case, 'radial') for case in RADIAL_CURVE_CASES])
-def test_curve_search_finds_the_faster_solution(goal, start, seed, mode):
+def test_optima_beyond_a_gap_in_the_curve_are_found(goal, start, seed, mode):
+    # with earlier settings the swarms settled elsewhere on these (test_solution_curve has
+    # goals on which today's swarms do, and the curve search is what finds the optimum)
     obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
     ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
-    without = iepso(obj, seed=seed, curve_search=0)
-    assert without.motion_time > ref.motion_time_s * 1.01       # the swarms settle elsewhere
     res = iepso(obj, seed=seed)
     assert res.error <= 1e-9
     assert res.motion_time <= ref.motion_time_s * 1.001

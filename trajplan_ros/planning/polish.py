@@ -37,7 +37,7 @@ import numpy as np
 
 from trajplan_ros.planning.objective import Objective
 
-__all__ = ['Linearisation', 'polish']
+__all__ = ['Linearisation', 'polish', 'settle']
 
 _TIE = 1e-12
 #: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
@@ -221,4 +221,24 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         if not live.any() or (enough is not None
                               and enough(here.time, here.error, delta >= trust / 5)):
             break
+    return x
+
+
+def settle(obj: Objective, x: np.ndarray, steps: int = 3) -> np.ndarray:
+    """
+    Return candidates x (K, planned) after Newton steps on the constraints alone.
+
+    Each step is kept where it lowers the error. Near a singular solution (an elbow almost
+    straight) the polish's merit, R + W |c|, can have its least value a little off the
+    solutions, where the constraints' multipliers outgrow W; a few plain Newton steps from
+    there settle on the solution.
+    """
+    x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
+    here = Linearisation(obj, x, 1.0, curvature=False)
+    for _ in range(steps):
+        trial = np.clip(x + here.newton(here.c), obj.lower, obj.upper)
+        there = Linearisation(obj, trial, 1.0, curvature=False)
+        better = there.error < here.error
+        x[better] = trial[better]
+        here.keep(there, better)
     return x

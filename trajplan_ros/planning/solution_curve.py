@@ -17,9 +17,12 @@ them all:
 2. every probe's curve is followed both ways, straight through the limits (``follow``), all in
    one vectorised walk;
 3. the seeds are the samples where the motion time is no larger than at their neighbours, among
-   the samples inside the limits and the points where the curve enters or leaves the limits
+   the samples inside the limits, the points where the curve enters or leaves the limits
    (``_limit_crossings``, so that an arc shorter than a step and an optimum on a limit are not
-   missed).
+   missed) and the samples just outside a limit that are nearer to it than their neighbours,
+   moved onto it (a curve that only touches a limit). The curve through the answer so far is
+   also sampled ten times as finely near it: two minima can lie closer together than a step
+   (near the edge of the workspace, where the curves are small and sharply bent).
 
 Where radial solutions are isolated (four planned joints) the curve is that of the position
 constraint alone, and the seeds are where the tool axis comes nearest the goal ray instead.
@@ -66,22 +69,25 @@ def project(curve: Objective, x: np.ndarray, steps: int = 3) -> np.ndarray:
     return x
 
 
-def follow(curve: Objective, x: np.ndarray, step: float, steps: int) -> np.ndarray:
+def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
+           steps: int) -> np.ndarray:
     """
     Sample the curves of solutions of ``curve`` through the rows of x (K, planned).
 
     Returns (K, 2 steps + 1, planned): each curve in order, with its row of x in the middle.
-    ``steps`` predictor-corrector steps of ``step`` rad each way (a tangent step, then one
-    Newton correction), straight through the joint limits (angles wrapped to [-pi, pi)).
+    ``steps`` predictor-corrector steps of ``step`` rad (one for all rows, or one per row) each
+    way (a step along the tangent and the curvature of the solutions, then one Newton
+    correction), straight through the joint limits (angles wrapped to [-pi, pi)).
     """
     k = x.shape[0]
     ends = np.concatenate((x, x))
-    here = Linearisation(curve, ends, 1.0, curvature=False)
+    here = Linearisation(curve, ends, 1.0)
     direction = here.null[:, 0, :] * np.repeat([1.0, -1.0], k)[:, None]    # both ways
+    length = np.tile(np.broadcast_to(step, (k,)), 2)[:, None]
     path = []
     for _ in range(steps):
-        ends = ends + direction * step
-        here = Linearisation(curve, ends, 1.0, curvature=False)
+        ends = ends + (direction + here.half_curv[:, 0, :] * length) * length
+        here = Linearisation(curve, ends, 1.0)
         ends = ends + here.newton(here.c)
         turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
         direction = here.null[:, 0, :] * turn[:, None]
@@ -109,26 +115,39 @@ def _limit_crossings(obj: Objective, a: np.ndarray, b: np.ndarray) -> np.ndarray
 
 
 def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
-    """Return the indices of the points kept in order, each ``radius`` (max-norm) from the rest."""
-    apart = np.max(np.abs(points[:, None, :] - points[None, :, :]), axis=2) >= radius
-    kept: list[int] = []
-    for i in range(len(points)):
-        if all(apart[i, j] for j in kept):
-            kept.append(i)
-    return np.array(kept, dtype=int)
+    """
+    Return the points, best first, that are ``radius`` (max-norm) or farther from every better one.
+
+    The first of each grid cell of size ``radius`` is kept first (cheap), then the pairs.
+    """
+    _, first = np.unique(np.floor(points / radius), axis=0, return_index=True)
+    points = points[np.sort(first)]
+    near = np.max(np.abs(points[:, None, :] - points[None, :, :]), axis=2) < radius
+    return points[~np.any(np.tril(near, -1), axis=1)]
 
 
-def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: float,
+def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
                steps: int) -> np.ndarray:
     """
     Return points along the curves through the probes, (K, L, planned); NaN where unusable.
 
     Each curve in order: a sample, where the chord to the next one enters the limits, where it
-    leaves them, the next sample, and so on. Points outside the limits or farther than 1e-2 of
-    the reach from the solutions are NaN.
+    leaves them, the next sample, and so on. A sample outside the limits that is nearer to them
+    than both its neighbours is moved onto them. Points outside the limits or farther than 1e-2
+    of the reach from the solutions are NaN.
     """
     along = follow(curve, project(curve, probes), step, steps)              # (K, S, planned)
     k, _, dim = along.shape
+    # on a limit, not outside it by a rounding error (a curve can lie on a limit: the base
+    # joint's angle is the same all along it)
+    snap = np.clip(along, obj.lower, obj.upper)
+    along = np.where(np.abs(along - snap) <= 1e-9, snap, along)
+    # a sample outside the limits but nearer than both neighbours: where the curve may just
+    # touch a limit from outside (a solution set of one point) or dip back in between samples
+    outside = np.maximum(obj.lower - along, along - obj.upper).max(axis=2)
+    padded = np.pad(outside, ((0, 0), (1, 1)), constant_values=np.inf)
+    touch = (outside > 0) & (outside <= padded[:, :-2]) & (outside <= padded[:, 2:])
+    along = np.where(touch[:, :, None], np.clip(along, obj.lower, obj.upper), along)
     ends = _limit_crossings(obj, along[:, :-1].reshape(-1, dim), along[:, 1:].reshape(-1, dim))
     crossings = ends.reshape(2, k, -1, dim).transpose(1, 2, 0, 3)
     points = np.concatenate((along[:, :-1, None], crossings), axis=2).reshape(k, -1, dim)
@@ -140,36 +159,50 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: float
 
 
 def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
-                step: float = 0.5, steps: int = 12) -> np.ndarray:
+                step: float = 0.7, steps: int = 12, fine: float = 0.05) -> np.ndarray:
     """
     Return seeds for ``polish`` along the curves through ``probes`` (see the module docstring).
 
     ``probes`` (K, planned) need not be solutions; none are returned where there is no curve.
-    ``best`` is the answer so far (None when it does not reach the goal): a seed is kept only
-    if a faster solution may lie within a sample of it (R changes by at most 1/omega per
-    radian of joint travel), and not within half a step of ``best``. Of seeds within half a
-    step of each other only the best is kept (the same minimum, reached along the curves
-    through different probes).
+    ``best`` is the answer so far (None when it does not reach the goal). Its curve is also
+    sampled every ``fine`` rad near it, for minima closer to it than a ``step``. A seed is kept
+    only if a faster solution than ``best`` may lie within a sample of it (R changes by at most
+    1/omega per radian of joint travel), and not within half a sample of ``best``. Of seeds
+    within half a sample of each other only the best is kept (the same minimum, reached along
+    the curves through different probes). On the fine samples of position-only curves the
+    neighbours of each seed are seeds too: near a fold of the arm (an elbow almost straight)
+    two radial solutions can lie within one fine sample, and Newton's method from either side
+    finds each.
     """
     curve = curve_constraint(obj)
     if curve is None:
         return np.empty((0, probes.shape[1]))
-    points = _on_curves(obj, curve, probes, step, steps)
+    spacing = np.full(len(probes), step)
+    if best is not None:
+        probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
+    points = _on_curves(obj, curve, probes, spacing, steps)
     flat = points.reshape(-1, probes.shape[1])
     usable = ~np.isnan(flat[:, 0])
     q = np.where(usable[:, None], flat, 0.0)
     time = np.where(usable, obj.motion_time(q), np.inf).reshape(points.shape[:2])
-    key = (time if curve is obj else
-           np.where(usable, obj.axis_angle(obj.tool(q)[1]), np.inf).reshape(time.shape))
+    if curve is obj:             # least time, then least travel (a tied stretch has one minimum)
+        travel = np.abs(q - obj.start[: q.shape[1]]).sum(axis=1).reshape(time.shape)
+        key = time + 1e-6 * travel / obj.omega
+    else:
+        key = np.where(usable, obj.axis_angle(obj.tool(q)[1]), np.inf).reshape(time.shape)
     pad_key, pad_time = (np.pad(v, ((0, 0), (1, 1)), constant_values=np.inf)
                          for v in (key, time))
     minima = np.isfinite(key) & (key <= pad_key[:, :-2]) & (key <= pad_key[:, 2:])
     neighbour = np.minimum(pad_time[:, :-2], pad_time[:, 2:])
-    # the least R within a sample spacing (1.25 step, for the corrector's moves) of a minimum
+    # the least R within a sample spacing (1.25 steps, for the corrector's moves) of a minimum
     lowest = (np.where(np.isfinite(neighbour), (time + neighbour) / 2, time)
-              - 0.625 * step / obj.omega)
+              - 0.625 * spacing[:, None] / obj.omega)
     if best is not None:
+        if curve is not obj:     # two radial solutions can lie within a fine sample (a fold)
+            minima[-1] |= np.roll(minima[-1], 1) | np.roll(minima[-1], -1)
         minima &= lowest < obj.motion_time(best[None, :])[0]
-        minima &= np.max(np.abs(points - best), axis=2) >= step / 2
-    seeds, order = flat[minima.ravel()], np.argsort(key[minima], kind='stable')
-    return seeds[order][_distinct(seeds[order], step / 2)]
+        minima &= np.max(np.abs(points - best), axis=2) >= spacing[:, None] / 2
+    groups = [(minima[spacing == size], key[spacing == size], points[spacing == size], size)
+              for size in np.unique(spacing)]
+    return np.concatenate([_distinct(p[m][np.argsort(k[m], kind='stable')], size / 2)
+                           for m, k, p, size in groups])

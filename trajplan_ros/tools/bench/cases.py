@@ -39,6 +39,8 @@ class Case:
     start: np.ndarray
     exact: ExactOptimum
     seed: int
+    #: The seed of the set the case was drawn in (``draw_cases``).
+    draw_seed: int = 0
 
     @property
     def exact_time(self) -> float:
@@ -116,7 +118,7 @@ def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: 
         exact = exact_minimum(arm, goal, start, mode=mode.value)
         solved = np.isfinite(exact.motion_time_s)
         if (only == 'no-solution') != solved and (only != 'limit-optima' or _on_limit(arm, exact)):
-            cases.append(Case(goal, start, exact, plan_seed))
+            cases.append(Case(goal, start, exact, plan_seed, seed))
     if len(cases) < n:
         raise ValueError(f'found only {len(cases)} of {n} goals of the kind {only!r} in '
                          f'{mode.value} mode')

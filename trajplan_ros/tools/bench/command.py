@@ -27,7 +27,8 @@ from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
-                                             format_paper_heading, format_summary, summarise,
+                                             format_paper_heading, format_sets, format_summary,
+                                             summarise,
                                              write_plans_csv, write_summary_csv)
 from trajplan_ros.tools.bench.runner import Results, run
 
@@ -70,6 +71,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--mode', choices=[m.value for m in Mode], default=Mode.FREE.value)
     p.add_argument('--random-starts', action='store_true',
                    help='start from random in-limit configurations instead of q = 0')
+    p.add_argument('--sets', type=positive_count, default=1, metavar='N',
+                   help='N sets of goals with seeds SEED..SEED+N-1, reported set by set too '
+                        '(default 1)')
     p.add_argument('--only', choices=DRAWS, default='all',
                    help='draw only goals whose exact optimum has a joint on a limit, or only '
                         'goals without a solution (success: reported not reached); default all')
@@ -100,9 +104,10 @@ def _chosen_methods(args: argparse.Namespace) -> tuple[list[Method], list[str]]:
 def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
     """Return the cases the options ask for, after printing the line that says what they are."""
     if args.paper:
-        if args.goals or args.quick or args.random_starts or args.only != 'all':
+        if (args.goals or args.quick or args.random_starts or args.only != 'all'
+                or args.sets != 1):
             raise UsageError('--paper is one fixed target: use --runs, not --goals, --quick, '
-                             '--random-starts or --only')
+                             '--random-starts, --only or --sets')
         first = paper_case(arm, mode, args.seed)
         print(format_paper_heading(mode, args.seed, args.runs))
         return [replace(first, seed=args.seed + r) for r in range(args.runs)]
@@ -110,11 +115,12 @@ def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
         raise UsageError('--runs goes with --paper; on random goals use --goals')
     n = args.goals or (QUICK_GOALS if args.quick else DEFAULT_GOALS)
     try:
-        cases = draw_cases(arm, n, mode=mode, random_starts=args.random_starts, seed=args.seed,
-                           only=args.only)
+        cases = [case for seed in range(args.seed, args.seed + args.sets)
+                 for case in draw_cases(arm, n, mode=mode, random_starts=args.random_starts,
+                                        seed=seed, only=args.only)]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    print(format_goals_heading(n, mode, args.random_starts, args.seed, args.only))
+    print(format_goals_heading(n, mode, args.random_starts, args.seed, args.only, args.sets))
     return cases
 
 
@@ -142,6 +148,8 @@ def _report(args: argparse.Namespace, results: dict[str, Results], cases: Sequen
     rows = summarise(results)
     print(format_summary(rows))
     print()
+    if args.sets > 1:
+        print(format_sets(results, cases) + '\n')
     print(format_failures(results, cases, args.failures))
     if args.csv:
         write_summary_csv(args.csv, rows)

@@ -22,8 +22,8 @@ from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCES
                                              SUCCESS_GAP)
 
 __all__ = ['Summary', 'summarise', 'format_criteria', 'format_failures', 'format_goals_heading',
-           'format_paper', 'format_paper_heading', 'format_summary', 'write_plans_csv',
-           'write_summary_csv']
+           'format_paper', 'format_paper_heading', 'format_sets', 'format_summary',
+           'write_plans_csv', 'write_summary_csv']
 
 
 @dataclass(frozen=True)
@@ -79,11 +79,26 @@ _KINDS = {'all': '', 'limit-optima': ' with the exact optimum on a joint limit',
 
 
 def format_goals_heading(n: int, mode: Mode, random_starts: bool, seed: int,
-                         only: str = 'all') -> str:
+                         only: str = 'all', sets: int = 1) -> str:
     """Return the first line of a run on random goals."""
     starts = 'random in-limit starts' if random_starts else 'starts upright (q = 0)'
-    return (f"trajplan bench: {n} goal{'s' * (n != 1)}{_KINDS[only]}, {mode.value} mode, "
-            f'{starts}, seed {seed}; every method gets the same goals, starts and seeds.')
+    seeds = f'seed {seed}' if sets == 1 else f'{sets} sets, seeds {seed}..{seed + sets - 1}'
+    each = ' each' if sets > 1 else ''
+    return (f"trajplan bench: {n} goal{'s' * (n != 1)}{each}{_KINDS[only]}, {mode.value} mode, "
+            f'{starts}, {seeds}; every method gets the same goals, starts and seeds.')
+
+
+def format_sets(results: dict[str, Results], cases: Sequence[Case]) -> str:
+    """Return each method's success set by set, and its worst set."""
+    seeds = np.array([case.draw_seed for case in cases])
+    lines = []
+    for name, r in results.items():
+        rates = {int(s): float(r.success[seeds == s].mean()) for s in np.unique(seeds)}
+        worst = min(rates, key=rates.get)
+        lines.append(f'{name} per set (seed: success): '
+                     + ', '.join(f'{s}: {100 * v:.2f} %' for s, v in rates.items())
+                     + f'; worst {100 * rates[worst]:.2f} % (seed {worst})')
+    return '\n'.join(lines)
 
 
 def format_paper_heading(mode: Mode, seed: int, runs: int) -> str:
@@ -122,8 +137,8 @@ def format_failures(results: dict[str, Results], cases: Sequence[Case], limit: i
         for k in shown:
             case = cases[k]
             status = '' if r.plans[k] is None else f'  {r.plans[k].status.value}'
-            lines.append(f'  goal {_vector(case.goal)} m  start {_vector(case.start, 3)} rad  '
-                         f'seed {case.seed}  error {r.error[k]:.2e} m  '
+            lines.append(f'  set {case.draw_seed}  goal {_vector(case.goal)} m  '
+                         f'start {_vector(case.start, 3)} rad  seed {case.seed}  error {r.error[k]:.2e} m  '
                          f'axis {r.axis_error[k]:.2e} rad  gap {_percent(r.gap[k], 3)}{status}')
         if shown.size < failed.size:
             lines.append(f'  ... {failed.size - shown.size} more (--failures -1 lists all, '
