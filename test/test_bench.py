@@ -37,8 +37,8 @@ SUMMARY_HEADER = ['method', 'goals', 'success_rate', 'median_error_m', 'worst_er
                   'median_gap', 'median_time_s', 'p99_time_s', 'time_ratio_to_iepso']
 PLANS_HEADER = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
                 + [f'start_q{i}_rad' for i in range(1, 6)] + [f'q{i}_rad' for i in range(1, 5)]
-                + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
-                   'success'])
+                + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap',
+                   'efficiency', 'time_s', 'success'])
 
 
 def _read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:

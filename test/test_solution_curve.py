@@ -13,7 +13,8 @@ from trajplan_ros.planning.solution_curve import (_limit_crossings, curve_constr
                                                   curve_seeds, follow)
 
 ARM = paper_arm()
-SIX = ArmModel(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0], alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
+SIX = ArmModel(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0],
+               alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
                d=[0.2, 0, 0, 0.15, 0, 0.1], lower=np.full(6, -2.6), upper=np.full(6, 2.6))
 
 
@@ -42,7 +43,7 @@ def test_follow_walks_along_the_solutions_both_ways() -> None:
 
 def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> None:
     obj = Objective(ARM, TARGET, np.zeros(5))
-    lo, hi = obj.lower, obj.upper
+    lo = obj.lower
     a = np.array([[lo[0] - 0.1, 0, 0, 0], [0, 0, 0, 0], [lo[0] - 0.2, 0, 0, 0]])
     b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.1, 0, 0, 0]])
     enter, leave = _limit_crossings(obj, a, b)
@@ -68,7 +69,7 @@ OTHER_BRANCH_CASES = [
 
 @pytest.mark.parametrize('mode, goal, start, seed, on_limit', OTHER_BRANCH_CASES)
 def test_the_curve_search_finds_solutions_no_swarm_visited(mode, goal, start, seed,
-                                                          on_limit) -> None:
+                                                           on_limit) -> None:
     obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
     ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
     without = iepso(obj, seed=seed, curve_search=0)

@@ -14,12 +14,14 @@ The package is layered; each layer uses only those listed before it:
 The names below are the public library API.
 """
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
-from trajplan_ros.planning import (ALGORITHMS, DEFAULT_TOLERANCE, InvalidRequest, Mode,
-                                   Objective, plan, PlanResult, PlanStatus, RewardPunishment,
-                                   servo_trajectory, Trajectory, trajectory_points)
+from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE,
+                                   InvalidRequest, Mode, Objective, plan, PlanResult, PlanStatus,
+                                   RewardPunishment, servo_trajectory, Trajectory,
+                                   trajectory_points)
 
 __all__ = [
-    'ALGORITHMS', 'ArmModel', 'DEFAULT_TOLERANCE', 'InvalidArmModel', 'InvalidRequest', 'Mode',
-    'Objective', 'PlanResult', 'PlanStatus', 'RewardPunishment', 'Trajectory', 'paper_arm',
+    'ALGORITHMS', 'ArmModel', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'InvalidArmModel',
+    'InvalidRequest', 'Mode', 'Objective', 'PlanResult', 'PlanStatus', 'RewardPunishment',
+    'Trajectory', 'paper_arm',
     'plan', 'servo_trajectory', 'trajectory_points',
 ]

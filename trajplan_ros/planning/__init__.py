@@ -3,12 +3,13 @@
 """Direct trajectory planning: objective, fuzzy shaping, optimisers, trajectory and ``plan``."""
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
-from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, plan, PlanResult,
-                                           PlanStatus)
+from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
+                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus)
 from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory, trajectory_points
 
 __all__ = [
-    'ALGORITHMS', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'Mode', 'Objective', 'PlanResult',
+    'ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'Mode',
+    'Objective', 'PlanResult',
     'PlanStatus', 'RewardPunishment', 'Trajectory', 'plan', 'servo_trajectory',
     'trajectory_points',
 ]

@@ -315,7 +315,8 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     if not len(seeds):
         return
     found = np.concatenate((best[None, :],
-                            settle(obj, polish_candidates(obj, seeds, max_steps=steps))))
+                            settle(obj, polish_candidates(obj, seeds, max_steps=steps),
+                                   ON_GOAL)))
     ev = obj(found)
     i = _fastest(obj, found, ev.error)
     i = int(np.argmin(ev.efficiency)) if i is None else i

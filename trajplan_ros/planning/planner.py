@@ -116,7 +116,8 @@ class PlanResult:
 def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = 'iepso',
          omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
-         axis_tolerance: float = DEFAULT_AXIS_TOLERANCE, seed: int | np.random.Generator | None = None, population: int = 40,
+         axis_tolerance: float = DEFAULT_AXIS_TOLERANCE,
+         seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
          options: dict[str, Any] | None = None, max_planning_time: float | None = None,
          stop: Callable[[], bool] | None = None) -> PlanResult:

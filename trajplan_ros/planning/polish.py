@@ -224,21 +224,26 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     return x
 
 
-def settle(obj: Objective, x: np.ndarray, steps: int = 3) -> np.ndarray:
+def settle(obj: Objective, x: np.ndarray, below: float, steps: int = 3) -> np.ndarray:
     """
     Return candidates x (K, planned) after Newton steps on the constraints alone.
 
-    Each step is kept where it lowers the error. Near a singular solution (an elbow almost
+    Only candidates with an error between ``below`` and 1e-2 of the reach take the steps, and
+    each step is kept where it lowers the error. Near a singular solution (an elbow almost
     straight) the polish's merit, R + W |c|, can have its least value a little off the
     solutions, where the constraints' multipliers outgrow W; a few plain Newton steps from
     there settle on the solution.
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
-    here = Linearisation(obj, x, 1.0, curvature=False)
+    error = obj.errors(*obj.tool(x))
+    near = (error > below) & (error < 1e-2 * obj.arm.reach)
+    if not near.any():
+        return x
+    here = Linearisation(obj, x[near], 1.0, curvature=False)
     for _ in range(steps):
-        trial = np.clip(x + here.newton(here.c), obj.lower, obj.upper)
+        trial = np.clip(x[near] + here.newton(here.c), obj.lower, obj.upper)
         there = Linearisation(obj, trial, 1.0, curvature=False)
         better = there.error < here.error
-        x[better] = trial[better]
+        x[np.flatnonzero(near)[better]] = trial[better]
         here.keep(there, better)
     return x

@@ -56,7 +56,7 @@ def _wrap(q: np.ndarray) -> np.ndarray:
     return np.mod(q + np.pi, 2 * np.pi) - np.pi
 
 
-def project(curve: Objective, x: np.ndarray, steps: int = 3) -> np.ndarray:
+def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     """
     Return x (K, planned) moved towards the solutions of ``curve`` by minimum-norm Newton steps.
 

@@ -54,7 +54,8 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     where = (f'{job.label} {describe_goal(job.goal)} m from q = {describe_goal(start.q)} rad'
              f'{start.describe()}')
     result = plan(job.goal, start.q, arm=s.arm, mode=s.mode, algorithm=s.algorithm,
-                  omega=s.omega, tolerance=job.tolerance or s.tolerance, seed=s.seed,
+                  omega=s.omega, tolerance=job.tolerance or s.tolerance,
+                  axis_tolerance=s.axis_tolerance, seed=s.seed,
                   population=s.population, max_iter=s.max_iter,
                   max_planning_time=s.max_planning_time, stop=stop)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'

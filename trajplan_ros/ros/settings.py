@@ -15,7 +15,7 @@ from typing import Any, Mapping
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.planning import ALGORITHMS, DEFAULT_TOLERANCE, Mode
+from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
 
 
@@ -64,7 +64,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('angular_velocity', DEFAULT_OMEGA, 'servo angular velocity omega, rad/s',
                   bounds=(1e-3, 10.0)),
     ParameterSpec('mode', Mode.FREE.value,
-                  'free: position only; radial: eq. 12-13 orientation too',
+                  'free: position only; radial: the tool axis along the goal ray too (eq. 12-13)',
                   choices=tuple(m.value for m in Mode)),
     ParameterSpec('algorithm', 'iepso', 'optimiser', choices=tuple(ALGORITHMS)),
     ParameterSpec('population', 40, 'particles per swarm', bounds=(2, 10000)),
@@ -73,6 +73,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('tolerance', DEFAULT_TOLERANCE,
                   'largest position error that counts as reached, m '
                   '(a GetPlan tolerance > 0 wins)', bounds=(1e-12, 1.0)),
+    ParameterSpec('axis_tolerance', DEFAULT_AXIS_TOLERANCE,
+                  'radial mode: largest angle between the tool axis and the goal ray that '
+                  'counts as radial, rad', bounds=(1e-12, 3.2)),
     ParameterSpec('base_frame', 'base_link', 'frame_id of the returned tool path'),
     ParameterSpec('sample_period', 0.1, 'time between trajectory points, s',
                   bounds=(1e-3, 10.0)),
@@ -107,6 +110,7 @@ class Settings:
     max_iter: int
     seed: int | None
     tolerance: float
+    axis_tolerance: float
     base_frame: str
     sample_period: float
     start: np.ndarray
@@ -139,7 +143,8 @@ class Settings:
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
-                   tolerance=values['tolerance'], base_frame=values['base_frame'],
+                   tolerance=values['tolerance'], axis_tolerance=values['axis_tolerance'],
+                   base_frame=values['base_frame'],
                    sample_period=values['sample_period'], start=start,
                    max_planning_time=values['max_planning_time'],
                    max_trajectory_points=values['max_trajectory_points'],

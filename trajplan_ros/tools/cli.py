@@ -14,8 +14,8 @@ import numpy as np
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
-from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_TOLERANCE, plan, PlanResult,
-                                           PlanStatus)
+from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
+                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus)
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import finite_number, UsageError
 
@@ -38,6 +38,9 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
                    help='largest error in metres that counts as reached '
                         f'(default {DEFAULT_TOLERANCE})')
+    p.add_argument('--axis-tolerance', type=finite_number, default=DEFAULT_AXIS_TOLERANCE,
+                   metavar='RAD', help='radial mode: largest angle between the tool axis and the '
+                   f'goal ray that counts as radial (default {DEFAULT_AXIS_TOLERANCE})')
     p.add_argument('--max-planning-time', type=finite_number, default=None, metavar='S',
                    help='longest search per goal in seconds; past it the plan ends as timed_out '
                         'with its best answer (default: no limit)')
@@ -139,7 +142,8 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any
 def _run_plan(args: argparse.Namespace) -> int:
     arm = paper_arm()
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
-                'tolerance': args.tolerance, 'max_planning_time': args.max_planning_time}
+                'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
+                'max_planning_time': args.max_planning_time}
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '

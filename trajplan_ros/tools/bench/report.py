@@ -138,7 +138,8 @@ def format_failures(results: dict[str, Results], cases: Sequence[Case], limit: i
             case = cases[k]
             status = '' if r.plans[k] is None else f'  {r.plans[k].status.value}'
             lines.append(f'  set {case.draw_seed}  goal {_vector(case.goal)} m  '
-                         f'start {_vector(case.start, 3)} rad  seed {case.seed}  error {r.error[k]:.2e} m  '
+                         f'start {_vector(case.start, 3)} rad  seed {case.seed}  '
+                         f'error {r.error[k]:.2e} m  '
                          f'axis {r.axis_error[k]:.2e} rad  gap {_percent(r.gap[k], 3)}{status}')
         if shown.size < failed.size:
             lines.append(f'  ... {failed.size - shown.size} more (--failures -1 lists all, '
@@ -220,7 +221,8 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
     header = (['method', 'goal_index', 'seed', 'goal_x_m', 'goal_y_m', 'goal_z_m']
               + [f'start_q{i + 1}_rad' for i in range(n_joints)]
               + [f'q{i + 1}_rad' for i in range(planned)]
-              + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency', 'time_s',
+              + ['error_m', 'axis_error_rad', 'motion_time_s', 'exact_time_s', 'gap', 'efficiency',
+                 'time_s',
                  'success'])
     with open(path, 'w', newline='', encoding='utf-8') as handle:
         writer = csv.writer(handle)
@@ -228,5 +230,6 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
         for name, r in results.items():
             for k, case in enumerate(cases):
                 writer.writerow([name, k, case.seed, *case.goal, *case.start, *r.x[k], r.error[k],
-                                 r.axis_error[k], r.motion_time[k], case.exact_time, r.gap[k], r.efficiency[k],
+                                 r.axis_error[k], r.motion_time[k], case.exact_time, r.gap[k],
+                                 r.efficiency[k],
                                  r.seconds[k], bool(r.success[k])])

@@ -86,7 +86,7 @@ def _score(res: Results, k: int, obj: Objective, answer: Answer, case: Case) -> 
     exact = case.exact_time
     res.gap[k] = ev.motion_time[0] / exact - 1.0 if np.isfinite(exact) else np.nan
     res.claimed[k] = (answer.plan.success if answer.plan is not None
-                      else res.error[k] <= SUCCESS_ERROR and res.axis_error[k] <= SUCCESS_AXIS_ERROR)
+                      else bool(res.reached[k]))
 
 
 def run(methods: Sequence[Method], cases: Sequence[Case], arm: ArmModel, mode: Mode,
