@@ -45,12 +45,14 @@ def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> Non
     obj = Objective(ARM, TARGET, np.zeros(5))
     lo = obj.lower
     a = np.array([[lo[0] - 0.1, 0, 0, 0], [0, 0, 0, 0], [lo[0] - 0.2, 0, 0, 0]])
-    b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.1, 0, 0, 0]])
-    enter, leave = _limit_crossings(obj, a, b)
+    b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.05, 0, 0, 0]])
+    enter, leave, nearest = _limit_crossings(obj, a, b)
     np.testing.assert_allclose(enter[0], [lo[0], 0, 0, 0])      # enters at the limit
     np.testing.assert_allclose(leave[0], b[0])
     np.testing.assert_allclose(np.stack((enter[1], leave[1])), np.stack((a[1], b[1])))
-    assert np.all(np.isnan(enter[2])) and np.all(np.isnan(leave[2]))      # never inside
+    assert np.all(np.isnan(enter[2])) and np.all(np.isnan(leave[2]))      # never inside ...
+    np.testing.assert_allclose(nearest[2], [lo[0], 0, 0, 0])     # ... but 0.05 rad from it
+    assert np.all(np.isnan(nearest[:2]))
     # through the wrap at -pi/pi: the chord is the short way round, outside q1's limits
     wrap = _limit_crossings(obj, np.array([[3.0, 0, 0, 0]]), np.array([[-3.0, 0, 0, 0]]))
     assert np.all(np.isnan(wrap))
@@ -89,7 +91,7 @@ def test_seeds_are_in_limit_points_near_the_curves_and_distinct() -> None:
     seeds = curve_seeds(obj, probes, None)
     assert len(seeds) >= 2
     assert np.all((seeds >= obj.lower) & (seeds <= obj.upper))
-    assert np.all(obj(seeds).error <= 1e-2 * ARM.reach)
+    assert np.all(obj(seeds).error <= 5e-2 * ARM.reach)
     apart = np.max(np.abs(seeds[:, None] - seeds[None]), axis=2)[np.triu_indices(len(seeds), 1)]
     assert np.all(apart >= 0.25)                                  # one seed per minimum
     assert len(curve_seeds(obj, probes, seeds[0])) < len(seeds)   # only where faster

@@ -46,7 +46,7 @@ Additions of ours, documented in the README, each on by default because it measu
 * a curve search (``_curve_search``) once the run stops, where the solutions form curves (one
   free direction: free mode with four planned joints, radial mode with six; radial mode with
   four through the curves of the position constraint alone): ``solution_curve`` follows the
-  curves through the answer and through ``curve_search`` (14) points drawn inside the limits,
+  curves through the answer and through ``curve_search`` (20) points drawn inside the limits,
   both ways through the limits, and returns the points where the motion time is least along
   them (on position-only curves, where the tool axis comes nearest the goal ray), where they
   enter, leave or just touch the limits, and, ten times as finely sampled, near the answer.
@@ -350,15 +350,19 @@ def _fastest(obj: Objective, x: np.ndarray, error: np.ndarray) -> int | None:
     """
     Return the index of the fastest candidate x (K, planned) on the goal (ours).
 
-    On the goal: error at most ``ON_GOAL``. Among those as fast to 1e-9, the one with the least
-    total joint travel sum |x_i - start_i|. None when none is on the goal.
+    On the goal: error at most ``ON_GOAL``. Among those as fast to 1e-7 (the settled ones, error
+    at most ``SETTLED``, if any), the one with the least total joint travel sum |x_i - start_i|.
+    None when none is on the goal.
     """
-    settled = error <= ON_GOAL
-    if not settled.any():
+    on_goal = error <= ON_GOAL
+    if not on_goal.any():
         return None
-    time = np.where(settled, obj.motion_time(x), np.inf)
+    time = np.where(on_goal, obj.motion_time(x), np.inf)
+    tied = time <= time.min() * (1 + 1e-7)
+    if np.any(tied & (error <= SETTLED)):
+        tied &= error <= SETTLED
     travel = np.abs(x - obj.start[: obj.arm.planned]).sum(axis=1)
-    return int(np.argmin(np.where(time <= time.min() * (1 + 1e-9), travel, np.inf)))
+    return int(np.argmin(np.where(tied, travel, np.inf)))
 
 
 def _answer(swarm: _Swarms, obj: Objective) -> np.ndarray:
@@ -411,7 +415,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
           seed: int | np.random.Generator | None = None, swarms: int | None = None,
           polish: bool = True, polish_period: int = 5, polish_count: int | None = None,
           polish_steps: int | None = None, agreement: int = 2, patience_rounds: int = 4,
-          restart: bool = True, curve_search: int = 14, elimination: float = 0.1,
+          restart: bool = True, curve_search: int = 20, elimination: float = 0.1,
           elimination_period: int = 5, inertia: tuple[float, float] = (0.9, 0.4),
           c1: float = 2.0, c2: float = 2.0, c3: tuple[float, float] = (2.0, 0.0),
           max_velocity: float = 0.2, interrupt: Interrupt | None = None) -> OptimizeResult:

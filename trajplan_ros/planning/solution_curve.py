@@ -98,9 +98,12 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
 
 def _limit_crossings(obj: Objective, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
-    Return where the chords a -> b enter and leave the joint limits, (2, K, planned).
+    Return where the chords a -> b enter and leave the joint limits, (3, K, planned).
 
-    The chord runs from a to a + wrap(b - a); NaN rows where it misses the limits.
+    The chord runs from a to a + wrap(b - a); NaN rows where it misses the limits. The third
+    point is, for a chord that misses them by less than 0.1 rad, its point nearest to them
+    (of nine along it), moved onto them: the curve bends away from its chords, and the part of
+    an arc inside the limits can be shorter than a chord's miss (in a corner of the limits).
     """
     d = _wrap(b - a)
     with np.errstate(divide='ignore', invalid='ignore'):
@@ -110,8 +113,13 @@ def _limit_crossings(obj: Objective, a: np.ndarray, b: np.ndarray) -> np.ndarray
     enter = np.where(moving, np.fmin(t_lo, t_hi), np.where(inside, -np.inf, np.inf)).max(axis=1)
     leave = np.where(moving, np.fmax(t_lo, t_hi), np.where(inside, np.inf, -np.inf)).min(axis=1)
     enter, leave = np.maximum(enter, 0.0), np.minimum(leave, 1.0)
-    t = np.where(enter <= leave, np.stack((enter, leave)), np.nan)[:, :, None]
-    return np.clip(a + t * d, obj.lower, obj.upper)
+    t = np.where(enter <= leave, np.stack((enter, leave)), np.nan)
+    along = a[:, None, :] + np.linspace(0.0, 1.0, 9)[None, :, None] * d[:, None, :]
+    miss = np.maximum(obj.lower - along, along - obj.upper).max(axis=2)          # (K, 9)
+    nearest = np.argmin(miss, axis=1)
+    gap = miss[np.arange(len(a)), nearest]
+    t = np.concatenate((t, np.where((enter > leave) & (gap < 0.1), nearest / 8.0, np.nan)[None]))
+    return np.clip(a + t[:, :, None] * d, obj.lower, obj.upper)
 
 
 def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
@@ -127,14 +135,17 @@ def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
 
 
 def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
-               steps: int) -> np.ndarray:
+               steps: int) -> tuple[np.ndarray, np.ndarray]:
     """
-    Return points along the curves through the probes, (K, L, planned); NaN where unusable.
+    Return points along the curves through the probes, (K, L, planned), NaN where unusable.
+
+    The samples of the walks (K, S, planned) come second.
 
     Each curve in order: a sample, where the chord to the next one enters the limits, where it
-    leaves them, the next sample, and so on. A sample outside the limits that is nearer to them
-    than both its neighbours is moved onto them. Points outside the limits or farther than 1e-2
-    of the reach from the solutions are NaN.
+    leaves them, where it nearly meets them (``_limit_crossings``), the next sample, and so on.
+    A sample outside the limits that is nearer to them than both its neighbours is moved onto
+    them. Points outside the limits or farther than 5e-2 of the reach from the solutions (the
+    points moved onto the limits can be that far) are NaN.
     """
     along = follow(curve, project(curve, probes), step, steps)              # (K, S, planned)
     k, _, dim = along.shape
@@ -149,13 +160,34 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     touch = (outside > 0) & (outside <= padded[:, :-2]) & (outside <= padded[:, 2:])
     along = np.where(touch[:, :, None], np.clip(along, obj.lower, obj.upper), along)
     ends = _limit_crossings(obj, along[:, :-1].reshape(-1, dim), along[:, 1:].reshape(-1, dim))
-    crossings = ends.reshape(2, k, -1, dim).transpose(1, 2, 0, 3)
+    crossings = ends.reshape(3, k, -1, dim).transpose(1, 2, 0, 3)
     points = np.concatenate((along[:, :-1, None], crossings), axis=2).reshape(k, -1, dim)
     flat = np.concatenate((points, along[:, -1:]), axis=1).reshape(-1, dim)
     valid = np.all((flat >= obj.lower) & (flat <= obj.upper), axis=1)      # NaN rows: False
     p, u = curve.tool(np.where(valid[:, None], flat, 0.0))
-    valid &= curve.errors(p, u) <= 1e-2 * obj.arm.reach
-    return np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim)
+    valid &= curve.errors(p, u) <= 5e-2 * obj.arm.reach
+    return np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along
+
+
+def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np.ndarray:
+    """
+    Return a lower bound of R near each point of ``_on_curves``, (K, L), from its samples.
+
+    Between two neighbouring samples each joint is taken to move monotonically, give or take a
+    tenth of the sample spacing (the curve bends between samples): its displacement is then no
+    smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
+    displacement over omega. A sample is bounded over the stretches on either side of it, a
+    point between two samples over theirs.
+    """
+    moved = samples - obj.start[: samples.shape[2]]
+    a, b = moved[:, :-1], moved[:, 1:]
+    least = np.where(a * b <= 0.0, 0.0, np.minimum(np.abs(a), np.abs(b)))
+    stretch = (np.max(least, axis=2) - 0.1 * spacing[:, None]) / obj.omega      # (K, S - 1)
+    padded = np.pad(stretch, ((0, 0), (1, 1)), constant_values=np.inf)
+    at_samples = np.minimum(padded[:, :-1], padded[:, 1:])                       # (K, S)
+    between = np.repeat(stretch, 3, axis=1).reshape(len(samples), -1, 3)
+    points = np.concatenate((at_samples[:, :-1, None], between), axis=2).reshape(len(samples), -1)
+    return np.concatenate((points, at_samples[:, -1:]), axis=1)
 
 
 def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
@@ -166,8 +198,8 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     ``probes`` (K, planned) need not be solutions; none are returned where there is no curve.
     ``best`` is the answer so far (None when it does not reach the goal). Its curve is also
     sampled every ``fine`` rad near it, for minima closer to it than a ``step``. A seed is kept
-    only if a faster solution than ``best`` may lie within a sample of it (R changes by at most
-    1/omega per radian of joint travel), and not within half a sample of ``best``. Of seeds
+    only if a faster solution than ``best`` may lie between its neighbours (``_lowest_time``),
+    and not within half a sample of ``best``. Of seeds
     within half a sample of each other only the best is kept (the same minimum, reached along
     the curves through different probes). On the fine samples of position-only curves the
     neighbours of each seed are seeds too: near a fold of the arm (an elbow almost straight)
@@ -180,7 +212,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     spacing = np.full(len(probes), step)
     if best is not None:
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
-    points = _on_curves(obj, curve, probes, spacing, steps)
+    points, samples = _on_curves(obj, curve, probes, spacing, steps)
     flat = points.reshape(-1, probes.shape[1])
     usable = ~np.isnan(flat[:, 0])
     q = np.where(usable[:, None], flat, 0.0)
@@ -190,17 +222,12 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
         key = time + 1e-6 * travel / obj.omega
     else:
         key = np.where(usable, obj.axis_angle(obj.tool(q)[1]), np.inf).reshape(time.shape)
-    pad_key, pad_time = (np.pad(v, ((0, 0), (1, 1)), constant_values=np.inf)
-                         for v in (key, time))
+    pad_key = np.pad(key, ((0, 0), (1, 1)), constant_values=np.inf)
     minima = np.isfinite(key) & (key <= pad_key[:, :-2]) & (key <= pad_key[:, 2:])
-    neighbour = np.minimum(pad_time[:, :-2], pad_time[:, 2:])
-    # the least R within a sample spacing (1.25 steps, for the corrector's moves) of a minimum
-    lowest = (np.where(np.isfinite(neighbour), (time + neighbour) / 2, time)
-              - 0.625 * spacing[:, None] / obj.omega)
     if best is not None:
         if curve is not obj:     # two radial solutions can lie within a fine sample (a fold)
             minima[-1] |= np.roll(minima[-1], 1) | np.roll(minima[-1], -1)
-        minima &= lowest < obj.motion_time(best[None, :])[0]
+        minima &= _lowest_time(obj, samples, spacing) < obj.motion_time(best[None, :])[0]
         minima &= np.max(np.abs(points - best), axis=2) >= spacing[:, None] / 2
     groups = [(minima[spacing == size], key[spacing == size], points[spacing == size], size)
               for size in np.unique(spacing)]
