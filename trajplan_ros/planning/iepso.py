@@ -303,8 +303,9 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
 
     The curves are those through the answer so far and through ``probes`` points drawn inside
     the limits. A polished seed that ``_fastest`` prefers to the answer (or, while the goal is
-    not reached, one with a lower F) replaces the best swarm's p_g. The polished seeds are
-    settled by plain Newton steps (``polish.settle``) first.
+    not reached, one with a lower F) replaces the best swarm's p_g. The seeds get twice the
+    polish steps of a round (they may start a little off the solutions and far along them from
+    their minimum) and are settled by plain Newton steps (``polish.settle``).
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
@@ -315,7 +316,7 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     if not len(seeds):
         return
     found = np.concatenate((best[None, :],
-                            settle(obj, polish_candidates(obj, seeds, max_steps=steps),
+                            settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps),
                                    ON_GOAL)))
     ev = obj(found)
     i = _fastest(obj, found, ev.error)

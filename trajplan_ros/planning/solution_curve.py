@@ -135,11 +135,12 @@ def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
 
 
 def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
-               steps: int) -> tuple[np.ndarray, np.ndarray]:
+               steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     Return points along the curves through the probes, (K, L, planned), NaN where unusable.
 
-    The samples of the walks (K, S, planned) come second.
+    The samples of the walks (K, S, planned) come second, and third which points are on the
+    curves at all (K, L): every sample, and the crossing points that exist.
 
     Each curve in order: a sample, where the chord to the next one enters the limits, where it
     leaves them, where it nearly meets them (``_limit_crossings``), the next sample, and so on.
@@ -163,10 +164,27 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     crossings = ends.reshape(3, k, -1, dim).transpose(1, 2, 0, 3)
     points = np.concatenate((along[:, :-1, None], crossings), axis=2).reshape(k, -1, dim)
     flat = np.concatenate((points, along[:, -1:]), axis=1).reshape(-1, dim)
+    present = np.ones(flat.shape[0], dtype=bool).reshape(k, -1)
+    present[:, :-1] = ~np.isnan(points[:, :, 0]) | (np.arange(points.shape[1]) % 4 == 0)
     valid = np.all((flat >= obj.lower) & (flat <= obj.upper), axis=1)      # NaN rows: False
     p, u = curve.tool(np.where(valid[:, None], flat, 0.0))
     valid &= curve.errors(p, u) <= 5e-2 * obj.arm.reach
-    return np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along
+    return np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along, present
+
+
+def _neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the index of the nearest present point before and after each point, (K, L) each.
+
+    -1 where there is none before, L where there is none after.
+    """
+    count = present.shape[1]
+    index = np.broadcast_to(np.arange(count), present.shape)
+    before = np.maximum.accumulate(np.where(present, index, -1), axis=1)
+    after = np.minimum.accumulate(np.where(present, index, count)[:, ::-1], axis=1)[:, ::-1]
+    edge = np.full((len(present), 1), 1)
+    return (np.concatenate((-edge, before[:, :-1]), axis=1),
+            np.concatenate((after[:, 1:], count * edge), axis=1))
 
 
 def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np.ndarray:
@@ -212,7 +230,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     spacing = np.full(len(probes), step)
     if best is not None:
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
-    points, samples = _on_curves(obj, curve, probes, spacing, steps)
+    points, samples, present = _on_curves(obj, curve, probes, spacing, steps)
     flat = points.reshape(-1, probes.shape[1])
     usable = ~np.isnan(flat[:, 0])
     q = np.where(usable[:, None], flat, 0.0)
@@ -222,11 +240,16 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
         key = time + 1e-6 * travel / obj.omega
     else:
         key = np.where(usable, obj.axis_angle(obj.tool(q)[1]), np.inf).reshape(time.shape)
-    pad_key = np.pad(key, ((0, 0), (1, 1)), constant_values=np.inf)
-    minima = np.isfinite(key) & (key <= pad_key[:, :-2]) & (key <= pad_key[:, 2:])
+    before, after = _neighbours(present)
+    padded = np.pad(key, ((0, 0), (0, 1)), constant_values=np.inf)      # index -1 and L: inf
+    minima = (np.isfinite(key) & (key <= np.take_along_axis(padded, before, axis=1))
+              & (key <= np.take_along_axis(padded, after, axis=1)))
     if best is not None:
         if curve is not obj:     # two radial solutions can lie within a fine sample (a fold)
-            minima[-1] |= np.roll(minima[-1], 1) | np.roll(minima[-1], -1)
+            last = np.flatnonzero(minima[-1])
+            minima[-1, before[-1, last][before[-1, last] >= 0]] = True
+            minima[-1, after[-1, last][after[-1, last] < key.shape[1]]] = True
+            minima[-1] &= np.isfinite(key[-1])
         minima &= _lowest_time(obj, samples, spacing) < obj.motion_time(best[None, :])[0]
         minima &= np.max(np.abs(points - best), axis=2) >= spacing[:, None] / 2
     groups = [(minima[spacing == size], key[spacing == size], points[spacing == size], size)
