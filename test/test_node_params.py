@@ -137,7 +137,8 @@ def test_not_reached_gives_an_empty_plan_and_tolerance_counts(planner, peer) -> 
         answer = peer.call(GetPlan, '/arm_ns/plan_trajectory', plan_request(HOPELESS_GOAL))
         assert list(answer.plan.poses) == []
         planner.wait_for(r'service call #\d+ \(0.05, -0.05, -0.25\) m from .*: not_reached: '
-                         r'goal not reached: best error .* is above the tolerance 1e-06 m', mark)
+                         r'goal not reached: best position error .* is above the tolerance '
+                         r'1e-06 m', mark)
         # the same goal with a request tolerance of 10 cm counts as reached
         answer = peer.call(GetPlan, '/arm_ns/plan_trajectory', plan_request(HOPELESS_GOAL, 0.1))
         assert answer.plan.poses
