@@ -29,6 +29,8 @@ constraint alone, and the seeds are where the tool axis comes nearest the goal r
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from trajplan_ros.planning.objective import Mode, Objective
@@ -134,13 +136,20 @@ def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
     return points[~np.any(np.tril(near, -1), axis=1)]
 
 
-def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
-               steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """
-    Return points along the curves through the probes, (K, L, planned), NaN where unusable.
+class _Walk(NamedTuple):
+    """The points along the curves through K probes (``_on_curves``)."""
 
-    The samples of the walks (K, S, planned) come second, and third which points are on the
-    curves at all (K, L): every sample, and the crossing points that exist.
+    points: np.ndarray      # (K, L, planned), NaN where unusable
+    samples: np.ndarray     # the samples of the walks, (K, S, planned)
+    present: np.ndarray     # which points are on the curves at all (K, L): every sample, and
+    #                         the crossing points that exist
+    axis: np.ndarray        # the tool axis at each point, (K L, 3)
+
+
+def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
+               steps: int) -> _Walk:
+    """
+    Return the points along the curves through the probes (``_Walk``).
 
     Each curve in order: a sample, where the chord to the next one enters the limits, where it
     leaves them, where it nearly meets them (``_limit_crossings``), the next sample, and so on.
@@ -169,7 +178,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     valid = np.all((flat >= obj.lower) & (flat <= obj.upper), axis=1)      # NaN rows: False
     p, u = curve.tool(np.where(valid[:, None], flat, 0.0))
     valid &= curve.errors(p, u) <= 5e-2 * obj.arm.reach
-    return np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along, present
+    return _Walk(np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along, present, u)
 
 
 def _neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -230,7 +239,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     spacing = np.full(len(probes), step)
     if best is not None:
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
-    points, samples, present = _on_curves(obj, curve, probes, spacing, steps)
+    points, samples, present, axis = _on_curves(obj, curve, probes, spacing, steps)
     flat = points.reshape(-1, probes.shape[1])
     usable = ~np.isnan(flat[:, 0])
     q = np.where(usable[:, None], flat, 0.0)
@@ -239,7 +248,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
         travel = np.abs(q - obj.start[: q.shape[1]]).sum(axis=1).reshape(time.shape)
         key = time + 1e-6 * travel / obj.omega
     else:
-        key = np.where(usable, obj.axis_angle(obj.tool(q)[1]), np.inf).reshape(time.shape)
+        key = np.where(usable, obj.axis_angle(axis), np.inf).reshape(time.shape)
     before, after = _neighbours(present)
     padded = np.pad(key, ((0, 0), (0, 1)), constant_values=np.inf)      # index -1 and L: inf
     minima = (np.isfinite(key) & (key <= np.take_along_axis(padded, before, axis=1))
