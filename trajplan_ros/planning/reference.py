@@ -77,16 +77,18 @@ def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.
 
 
 def _zoom(arm: ArmModel, goal: np.ndarray, start: np.ndarray, omega: float,
-          sweep: tuple[np.ndarray, np.ndarray], zoom_levels: int,
+          sweep: tuple[np.ndarray, np.ndarray, np.ndarray], zoom_levels: int,
           tmin: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
-    Zoom in from ``sweep`` (phi samples, their times) on the least time; return q and times.
+    Zoom in from ``sweep`` (phi samples, their solutions, their times) on the least time.
+
+    Return the last level's solutions and their times.
 
     With ``tmin``, zoom in on the least total joint travel among the samples whose time ties
     with ``tmin`` instead.
     """
-    phis, step = sweep[0], sweep[0][1] - sweep[0][0]
-    q, t = sweep[1], _times(arm, sweep[1], start, omega)
+    phis, q, t = sweep
+    step = phis[1] - phis[0]
     for _ in range(zoom_levels):
         if tmin is not None:
             t = np.where(t <= tmin * (1 + 1e-12) + 1e-15, np.abs(q - start[:4]).sum(axis=-1),
@@ -125,10 +127,11 @@ def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: 
         t = _times(arm, q, start, omega)
     elif mode == 'free':
         phis = np.linspace(-np.pi, np.pi, 20001)
-        sweep = (phis, _solutions(arm, goal, phis))
+        solved = _solutions(arm, goal, phis)
+        sweep = (phis, solved, _times(arm, solved, start, omega))
         q, t = _zoom(arm, goal, start, omega, sweep, zoom_levels)
         tmin = float(t.min())
-        if np.count_nonzero(_times(arm, sweep[1], start, omega) <= tmin * (1 + 1e-9)) > 1:
+        if np.count_nonzero(sweep[2] <= tmin * (1 + 1e-9)) > 1:
             q2, t2 = _zoom(arm, goal, start, omega, sweep, zoom_levels, tmin)   # a tied arc
             q, t = np.concatenate((q, q2)), np.concatenate((t, t2))
     else:

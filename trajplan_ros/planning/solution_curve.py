@@ -168,7 +168,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     outside = np.maximum(obj.lower - along, along - obj.upper).max(axis=2)
     padded = np.pad(outside, ((0, 0), (1, 1)), constant_values=np.inf)
     touch = (outside > 0) & (outside <= padded[:, :-2]) & (outside <= padded[:, 2:])
-    along = np.where(touch[:, :, None], np.clip(along, obj.lower, obj.upper), along)
+    along = np.where(touch[:, :, None], snap, along)
     ends = _limit_crossings(obj, along[:, :-1].reshape(-1, dim), along[:, 1:].reshape(-1, dim))
     crossings = ends.reshape(3, k, -1, dim).transpose(1, 2, 0, 3)
     points = np.concatenate((along[:, :-1, None], crossings), axis=2).reshape(k, -1, dim)
@@ -226,9 +226,9 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     ``best`` is the answer so far (None when it does not reach the goal). Its curve is also
     sampled every ``fine`` rad near it, for minima closer to it than a ``step``. A seed is kept
     only if a faster solution than ``best`` may lie between its neighbours (``_lowest_time``),
-    and not within half a sample of ``best``. Of seeds
-    within half a sample of each other only the best is kept (the same minimum, reached along
-    the curves through different probes). On the fine samples of position-only curves the
+    and not within half a sample of ``best``. Of seeds within half a sample of each other only
+    the best is kept (the same minimum, reached along the curves through different probes).
+    On the fine samples of position-only curves the
     neighbours of each seed are seeds too: near a fold of the arm (an elbow almost straight)
     two radial solutions can lie within one fine sample, and Newton's method from either side
     finds each.
