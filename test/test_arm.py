@@ -9,9 +9,10 @@ from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 
 
 def random_arm(rng: np.random.Generator, n: int) -> ArmModel:
-    return ArmModel(a=rng.uniform(0, 0.2, n), alpha=rng.choice([0, np.pi / 2, -np.pi / 2, 0.3], n),
-                    d=rng.uniform(0, 0.1, n), sign=rng.choice([-1, 1], n),
-                    offset=rng.uniform(-1, 1, n), lower=-np.full(n, 2.5), upper=np.full(n, 2.5))
+    return ArmModel.from_dh(
+        a=rng.uniform(0, 0.2, n), alpha=rng.choice([0, np.pi / 2, -np.pi / 2, 0.3], n),
+        d=rng.uniform(0, 0.1, n), sign=rng.choice([-1, 1], n),
+        offset=rng.uniform(-1, 1, n), lower=-np.full(n, 2.5), upper=np.full(n, 2.5))
 
 
 def test_paper_arm_upright_pose_is_the_papers_initial_position():
@@ -91,9 +92,9 @@ def test_invalid_models_are_refused_with_a_reason(change, reason):
     spec = {'a': [0.1, 0.1], 'alpha': [0, 0], 'd': [0, 0], 'lower': [-1, -1], 'upper': [1, 1]}
     spec.update(change)
     with pytest.raises(InvalidArmModel, match=reason):
-        ArmModel(**spec)
+        ArmModel.from_dh(**spec)
 
 
 def test_an_arm_without_joints_is_refused():
     with pytest.raises(InvalidArmModel, match='no joints'):
-        ArmModel(a=[], alpha=[], d=[], lower=[], upper=[])
+        ArmModel.from_dh(a=[], alpha=[], d=[], lower=[], upper=[])

@@ -163,10 +163,13 @@ PINNED_CASES = [
 
 
 @pytest.mark.parametrize('mode, goal, start, seed, x_hex, fun_hex, nit, nfev', PINNED_CASES)
-def test_results_are_pinned_bit_for_bit(mode, goal, start, seed, x_hex, fun_hex, nit, nfev):
+def test_results_are_pinned(mode, goal, start, seed, x_hex, fun_hex, nit, nfev):
+    # to 1e-12, not bit for bit: numpy's sin and cos take other SIMD paths on other CPUs, which
+    # moves the last bits of a pose (seen: 2 ulp of one radial answer on another machine); F
+    # holds the reward of an error of ~1e-17 m, which those bits move by a few parts in 1e7
     res = iepso(Objective(ARM, np.array(goal), np.array(start), mode=mode), seed=seed)
-    assert [v.hex() for v in res.x] == x_hex
-    assert res.fun.hex() == fun_hex
+    np.testing.assert_allclose(res.x, [float.fromhex(v) for v in x_hex], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.fun, float.fromhex(fun_hex), rtol=1e-5)
     assert (res.nit, res.nfev) == (nit, nfev)
 
 
@@ -197,8 +200,9 @@ def test_papers_iepso_alone_gets_close_but_not_exact():
 @pytest.mark.parametrize('n', [2, 3, 6, 7])
 def test_other_chains_reach_goals_from_their_own_configurations(n):
     rng = np.random.default_rng(100 + n)
-    arm = ArmModel(a=rng.uniform(0.05, 0.15, n), alpha=rng.choice([0.0, np.pi / 2, -np.pi / 2], n),
-                   d=rng.uniform(0.0, 0.1, n), lower=-np.full(n, 2.6), upper=np.full(n, 2.6))
+    arm = ArmModel.from_dh(
+        a=rng.uniform(0.05, 0.15, n), alpha=rng.choice([0.0, np.pi / 2, -np.pi / 2], n),
+        d=rng.uniform(0.0, 0.1, n), lower=-np.full(n, 2.6), upper=np.full(n, 2.6))
     for k in range(3):
         goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, n)))[0][0]
         res = iepso(Objective(arm, goal, np.zeros(n)), seed=k)

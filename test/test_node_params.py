@@ -43,8 +43,10 @@ def trajectories(planner: NodeProcess, peer: RosClient):
 
 
 def arm_parameters(arm: ArmModel, start: list[float]) -> list[Parameter]:
-    values = {f'arm.{k}': getattr(arm, k).tolist()
-              for k in ('a', 'alpha', 'd', 'offset', 'lower', 'upper')}
+    a, alpha, d = arm.dh
+    values = {f'arm.{k}': v.tolist() for k, v in (('a', a), ('alpha', alpha), ('d', d),
+                                                  ('offset', arm.offset), ('lower', arm.lower),
+                                                  ('upper', arm.upper))}
     values.update({'arm.sign': [int(s) for s in arm.sign],
                    'arm.joint_names': list(arm.joint_names),
                    'arm.planned': arm.planned, 'start_positions': start})
@@ -106,9 +108,9 @@ def test_a_bad_value_is_rejected_with_its_reason(planner, peer, name, value, rea
 
 
 def test_an_arm_with_other_joints_is_set_in_one_atomic_call(planner, peer, trajectories) -> None:
-    arm = ArmModel(a=[0.0, 0.12, 0.10, 0.05], alpha=[math.pi / 2, 0.0, 0.0, 0.0],
-                   d=[0.08, 0, 0, 0], lower=[-2.0] * 4, upper=[2.0] * 4,
-                   joint_names=['q1', 'q2', 'q3', 'q4'], planned=4)
+    arm = ArmModel.from_dh(a=[0.0, 0.12, 0.10, 0.05], alpha=[math.pi / 2, 0.0, 0.0, 0.0],
+                           d=[0.08, 0, 0, 0], lower=[-2.0] * 4, upper=[2.0] * 4,
+                           joint_names=['q1', 'q2', 'q3', 'q4'], planned=4)
     change = arm_parameters(arm, [0.0] * 4)
     # one at a time, every step is an inconsistent arm: refused
     [first] = peer.set_parameters(NODE, change[:1])

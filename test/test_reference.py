@@ -41,7 +41,8 @@ def test_no_local_search_beats_the_reference():
 
 def test_other_arm_shapes_are_refused():
     arm = paper_arm()
-    other = ArmModel(a=arm.a, alpha=np.zeros(5), d=arm.d, lower=arm.lower, upper=arm.upper,
-                     planned=4)
+    a, _, d = arm.dh
+    other = ArmModel.from_dh(a=a, alpha=np.zeros(5), d=d, lower=arm.lower, upper=arm.upper,
+                             planned=4)
     with pytest.raises(ValueError, match='shaped like'):
         exact_minimum(other, TARGET, np.zeros(5))

@@ -58,7 +58,7 @@ def test_every_parameter_has_a_description_and_a_unique_name() -> None:
 def test_defaults_give_the_paper_arm() -> None:
     settings = Settings.from_parameters(default_values())
     arm = paper_arm()
-    for key in ('a', 'alpha', 'd', 'sign', 'offset', 'lower', 'upper'):
+    for key in ('rotations', 'translations', 'base', 'sign', 'offset', 'lower', 'upper'):
         np.testing.assert_array_equal(getattr(settings.arm, key), getattr(arm, key))
     assert settings.arm.joint_names == arm.joint_names
     assert (settings.omega, settings.mode, settings.algorithm, settings.seed) == (

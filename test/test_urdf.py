@@ -64,10 +64,11 @@ def _urdf_frames(root: ET.Element, q: np.ndarray) -> list[np.ndarray]:
 
 def _random_arm(rng: np.random.Generator, n: int) -> ArmModel:
     quarter = np.pi / 2
-    return ArmModel(a=rng.uniform(0, 0.2, n), alpha=rng.choice([-quarter, 0, quarter, 0.3], n),
-                    d=rng.uniform(0, 0.2, n) * (rng.random(n) < 0.5), sign=rng.choice([-1, 1], n),
-                    offset=rng.choice([-quarter, 0, quarter, np.pi, 0.7], n),
-                    lower=-rng.uniform(1, 3, n), upper=rng.uniform(1, 3, n), planned=min(n, 4))
+    return ArmModel.from_dh(
+        a=rng.uniform(0, 0.2, n), alpha=rng.choice([-quarter, 0, quarter, 0.3], n),
+        d=rng.uniform(0, 0.2, n) * (rng.random(n) < 0.5), sign=rng.choice([-1, 1], n),
+        offset=rng.choice([-quarter, 0, quarter, np.pi, 0.7], n),
+        lower=-rng.uniform(1, 3, n), upper=rng.uniform(1, 3, n), planned=min(n, 4))
 
 
 @pytest.mark.parametrize('arm', [paper_arm(), _random_arm(np.random.default_rng(3), 6),

@@ -13,6 +13,7 @@ Forward kinematics is vectorised over an (N, n_joints) array of configurations.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import os
 from typing import Sequence
 
 import numpy as np
@@ -94,88 +95,246 @@ class ToolJacobian:
 
 
 _NEXT, _LAST = [1, 2, 0], [2, 0, 1]      # (a x b)_c = a_{c+1} b_{c+2} - a_{c+2} b_{c+1}
-#: The tool point and axis in the last frame, as a chain walk's (w, z) tail: the origin and z.
-_TOOL_FRAME = (np.zeros(2, dtype=complex), np.array([0.0, 1.0]))
+
+
+def _rot_x(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rot_z(angle: np.ndarray) -> np.ndarray:
+    """Return rotations about z, (..., 3, 3), for angles (...)."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(np.shape(angle) + (3, 3))
+    out[..., 0, 0], out[..., 0, 1], out[..., 1, 0], out[..., 1, 1] = c, -s, s, c
+    out[..., 2, 2] = 1.0
+    return out
+
+
+def _transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    out = np.zeros(rotation.shape[:-2] + (4, 4))
+    out[..., :3, :3] = rotation
+    out[..., :3, 3] = translation
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def _limit(name: str, values: Sequence[float], n: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (n,) or np.any(np.isnan(arr)):
+        raise InvalidArmModel(f'{name} needs {n} values (not NaN), got {arr.tolist()}')
+    return arr
+
+
+def _names(joint_names: Sequence[str] | None, n: int) -> tuple[str, ...]:
+    names = tuple(joint_names) if joint_names is not None else tuple(
+        f'joint{i + 1}' for i in range(n))
+    distinct = len(names) == n and len(set(names)) == n
+    if not distinct or not all(isinstance(s, str) and s for s in names):
+        raise InvalidArmModel(
+            f'joint_names must be {n} distinct non-empty names, got {list(names)}')
+    return names
+
+
+def _rotations(name: str, values: Sequence, n: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (n, 3, 3) or not np.all(np.isfinite(arr)):
+        raise InvalidArmModel(f'{name} needs {n} finite 3x3 rotation matrices')
+    if not np.allclose(arr @ np.swapaxes(arr, -1, -2), np.eye(3), atol=1e-9) or not np.allclose(
+            np.linalg.det(arr), 1.0, atol=1e-9):
+        raise InvalidArmModel(f'{name} holds a matrix that is not a rotation')
+    return arr
+
+
+#: How the walk applies a link rotation: skip it, the 2x2 rotation of y and z (a rotation about
+#: x, as in every DH link), or the full 3x3 product.
+_IDENTITY, _ABOUT_X, _GENERAL = 0, 1, 2
+
+
+def _kind(rotation: np.ndarray) -> int:
+    if np.array_equal(rotation, np.eye(3)):
+        return _IDENTITY
+    if rotation[0, 0] == 1.0 and not rotation[0, 1:].any() and not rotation[1:, 0].any():
+        return _ABOUT_X
+    return _GENERAL
 
 
 @dataclass(frozen=True, eq=False)
 class ArmModel:
     """
-    A chain of revolute joints; the first ``planned`` joints are optimised, the rest held.
+    A serial chain of revolute joints; the first ``planned`` joints are optimised, the rest held.
 
-    Attributes (all arrays have one entry per joint):
-        a, alpha, d: DH link length (m), twist (rad) and offset (m), transform
-            T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) (eq. 1).
+    The tool pose is B * Rz(theta_1) L_1 * Rz(theta_2) L_2 ... Rz(theta_n) L_n * tool, with
+    theta_i = sign_i * q_i + offset_i: B is the base transform (the base frame to the first
+    joint's frame, whose z axis is that joint's axis), L_i = (rotation_i, translation_i) the
+    fixed transform from joint i's frame (after its turn) to the next joint's frame, or to the
+    tip frame after the last joint. The tool point is ``tool_point`` and the tool axis
+    ``tool_axis`` in that tip frame. Build one with ``from_dh`` (eq. 1: L_i = Tz(d_i) Tx(a_i)
+    Rx(alpha_i)) or ``from_urdf`` (URDF origins and axes, fixed joints folded in).
+
+    Attributes (arrays have one entry per joint unless said otherwise):
+        rotations (n, 3, 3), translations (n, 3): the link transforms L_i (m).
+        base (4, 4): the base transform B.
+        tool_point, tool_axis (3,): in the tip frame (m; unit vector).
         sign, offset: theta_i = sign_i * q_i + offset_i (sign is +1 or -1).
-        lower, upper: joint limits on q (rad).
+        lower, upper: joint limits on q (rad); -inf / +inf for a continuous joint.
+        velocity: each joint's velocity limit (rad/s); +inf where there is none.
         joint_names: names used in JointState / JointTrajectory messages.
         planned: how many leading joints the planner moves (2..7); the others keep their start
             angle.
+        base_link, tip_link: the frames of the base and of the tip (messages' frame_id).
     """
 
-    a: np.ndarray
-    alpha: np.ndarray
-    d: np.ndarray
+    rotations: np.ndarray
+    translations: np.ndarray
+    base: np.ndarray
+    tool_point: np.ndarray
+    tool_axis: np.ndarray
     sign: np.ndarray
     offset: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+    velocity: np.ndarray
     joint_names: tuple[str, ...]
     planned: int
-    _cos_alpha: np.ndarray = field(init=False, repr=False, compare=False)
-    _sin_alpha: np.ndarray = field(init=False, repr=False, compare=False)
+    base_link: str
+    tip_link: str
+    _kinds: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    _tail: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
-    def __init__(self, a: Sequence[float], alpha: Sequence[float], d: Sequence[float], *,
+    def __init__(self, rotations: Sequence, translations: Sequence, *,
+                 base: np.ndarray | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
+                 tool_axis: Sequence[float] = (0.0, 0.0, 1.0),
                  sign: Sequence[float] | None = None, offset: Sequence[float] | None = None,
                  lower: Sequence[float], upper: Sequence[float],
-                 joint_names: Sequence[str] | None = None, planned: int | None = None) -> None:
-        n = len(a)
+                 velocity: Sequence[float] | None = None,
+                 joint_names: Sequence[str] | None = None, planned: int | None = None,
+                 base_link: str = 'base_link', tip_link: str = 'tool_link') -> None:
+        n = len(translations)
         if n == 0:
             raise InvalidArmModel('the arm has no joints')
         put = object.__setattr__
-        put(self, 'a', _vector('a', a, n))
-        put(self, 'alpha', _vector('alpha', alpha, n))
-        put(self, 'd', _vector('d', d, n))
+        put(self, 'rotations', _rotations('rotations', rotations, n))
+        put(self, 'translations', np.asarray(translations, dtype=float))
+        if self.translations.shape != (n, 3) or not np.all(np.isfinite(self.translations)):
+            raise InvalidArmModel(f'translations needs {n} finite (x, y, z) vectors')
+        base = np.eye(4) if base is None else np.asarray(base, dtype=float)
+        if base.shape != (4, 4) or not np.all(np.isfinite(base)):
+            raise InvalidArmModel('base must be a finite 4x4 transform')
+        _rotations('base', base[None, :3, :3], 1)
+        put(self, 'base', base)
+        put(self, 'tool_point', _vector('tool_point', tool_point, 3))
+        axis = _vector('tool_axis', tool_axis, 3)
+        if not np.linalg.norm(axis) > 1e-9:
+            raise InvalidArmModel(f'tool_axis must not be zero, got {axis.tolist()}')
+        put(self, 'tool_axis', axis / np.linalg.norm(axis))
         put(self, 'sign', _vector('sign', np.ones(n) if sign is None else sign, n))
         put(self, 'offset', _vector('offset', np.zeros(n) if offset is None else offset, n))
-        put(self, 'lower', _vector('lower', lower, n))
-        put(self, 'upper', _vector('upper', upper, n))
+        put(self, 'lower', _limit('lower', lower, n))
+        put(self, 'upper', _limit('upper', upper, n))
+        velocity = np.full(n, np.inf) if velocity is None else np.asarray(velocity, dtype=float)
+        if velocity.shape != (n,) or not np.all(velocity > 0):
+            raise InvalidArmModel(f'velocity needs {n} positive limits (rad/s), got '
+                                  f'{velocity.tolist()}')
+        put(self, 'velocity', velocity)
         if not np.all(np.abs(self.sign) == 1.0):
             raise InvalidArmModel(f'sign must be +1 or -1 per joint, got {self.sign.tolist()}')
-        bad = np.flatnonzero(self.lower > self.upper)
+        bad = np.flatnonzero(~(self.lower <= self.upper) | (self.lower == np.inf)
+                             | (self.upper == -np.inf))
         if bad.size:
             i = int(bad[0])
             raise InvalidArmModel(
                 f'joint {i + 1}: lower limit {self.lower[i]} is above upper limit {self.upper[i]}')
-        names = tuple(joint_names) if joint_names is not None else tuple(
-            f'joint{i + 1}' for i in range(n))
-        distinct = len(names) == n and len(set(names)) == n
-        if not distinct or not all(isinstance(s, str) and s for s in names):
-            raise InvalidArmModel(
-                f'joint_names must be {n} distinct non-empty names, got {list(names)}')
-        put(self, 'joint_names', names)
+        put(self, 'joint_names', _names(joint_names, n))
         planned = n if planned is None else int(planned)
         if not 2 <= planned <= min(n, 7):
             raise InvalidArmModel(
                 f'planned joints must be between 2 and {min(n, 7)}, got {planned}')
         put(self, 'planned', planned)
-        put(self, '_cos_alpha', np.cos(self.alpha))
-        put(self, '_sin_alpha', np.sin(self.alpha))
+        put(self, 'base_link', str(base_link))
+        put(self, 'tip_link', str(tip_link))
+        put(self, '_kinds', tuple(_kind(r) for r in self.rotations))
+        tool = np.stack((self.tool_point, self.tool_axis))
+        put(self, '_tail', (tool[:, 0] + 1j * tool[:, 1], tool[:, 2].copy()))
+
+    @classmethod
+    def from_dh(cls, a: Sequence[float], alpha: Sequence[float], d: Sequence[float], *,
+                sign: Sequence[float] | None = None, offset: Sequence[float] | None = None,
+                lower: Sequence[float], upper: Sequence[float],
+                velocity: Sequence[float] | None = None,
+                joint_names: Sequence[str] | None = None, planned: int | None = None
+                ) -> ArmModel:
+        """
+        Return the chain of standard DH parameters (eq. 1-2): L_i = Tz(d_i) Tx(a_i) Rx(alpha_i).
+
+        a and d in metres, alpha in radians, one entry per joint; the tool is the last frame's
+        origin and z axis.
+        """
+        n = len(a)
+        if n == 0:
+            raise InvalidArmModel('the arm has no joints')
+        a, alpha, d = (_vector(k, v, n) for k, v in (('a', a), ('alpha', alpha), ('d', d)))
+        translations = np.stack((a, np.zeros(n), d), axis=1)
+        return cls([_rot_x(t) for t in alpha], translations, sign=sign, offset=offset,
+                   lower=lower, upper=upper, velocity=velocity, joint_names=joint_names,
+                   planned=planned)
+
+    @classmethod
+    def from_urdf(cls, urdf: str | os.PathLike, base_link: str | None = None,
+                  tip_link: str | None = None, *, tool_offset: Sequence[float] = (0.0, 0.0, 0.0),
+                  tool_axis: Sequence[float] = (0.0, 0.0, 1.0)) -> ArmModel:
+        """
+        Return the chain from ``base_link`` to ``tip_link`` of a URDF (XML text or a file path).
+
+        See ``kinematics.urdf_import``: every revolute or continuous joint on the chain is
+        planned; the tool point is the tip link's origin plus ``tool_offset`` (m, tip frame) and
+        the tool axis ``tool_axis`` (tip frame). Raises InvalidArmModel with a one-line reason.
+        """
+        from trajplan_ros.kinematics.urdf_import import chain_from_urdf
+        return chain_from_urdf(cls, urdf, base_link, tip_link, tool_offset=tool_offset,
+                               tool_axis=tool_axis)
 
     @property
     def n_joints(self) -> int:
         """Return the number of joints in the chain."""
-        return self.a.size
+        return self.translations.shape[0]
+
+    @property
+    def continuous(self) -> np.ndarray:
+        """Return True for each joint without limits (a URDF continuous joint)."""
+        return ~np.isfinite(self.lower) & ~np.isfinite(self.upper)
+
+    @property
+    def reach_centre(self) -> np.ndarray:
+        """Return the first joint's origin in the base frame, the centre of the reach sphere."""
+        return self.base[:3, 3].copy()
 
     @property
     def reach(self) -> float:
         """
-        Radius of a sphere about the base origin that contains every tool position (eq. 14).
+        Radius of a sphere about ``reach_centre`` that contains every tool position (eq. 14).
 
-        Each link moves the tool point by at most sqrt(a_i^2 + d_i^2), so no goal farther than
-        the sum can be reached, whatever the joint angles.
+        Rotations keep lengths, so each link moves the tool point by at most the length of its
+        translation (sqrt(a_i^2 + d_i^2) for DH links) and the tool point lies within
+        ``tool_point``'s length of the tip: no goal farther than the sum can be reached, whatever
+        the joint angles.
         """
-        return float(np.sum(np.hypot(self.a, self.d)))
+        t = np.vstack((self.translations, self.tool_point))
+        return float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2])))
+
+    @property
+    def dh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Return (a, alpha, d) when the chain is a standard DH chain (``from_dh``), else None."""
+        plain = (np.array_equal(self.base, np.eye(4)) and not self.tool_point.any()
+                 and np.array_equal(self.tool_axis, (0.0, 0.0, 1.0)))
+        if not plain or any(k == _GENERAL for k in self._kinds) or self.translations[:, 1].any():
+            return None
+        r = self.rotations
+        return self.translations[:, 0], np.arctan2(r[:, 2, 1], r[:, 1, 1]), self.translations[:, 2]
+
+    def speeds(self, omega: float) -> np.ndarray:
+        """Return each joint's angular velocity (rad/s) for servo velocity omega: min(omega, limit)."""
+        return np.minimum(float(omega), self.velocity)
 
     def full_start(self, angles: Sequence[float]) -> np.ndarray:
         """
@@ -205,13 +364,13 @@ class ArmModel:
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
         q = np.asarray(q, dtype=float)[None, :]
-        w, z = self._chain(q, self.n_joints, self.planned, _TOOL_FRAME, jacobian=False)
+        w, z = self._chain(q, self.n_joints, self.planned, self._tail, jacobian=False)
         return w[:, 0], z[:, 0]
 
     def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
              ) -> tuple[np.ndarray, np.ndarray]:
         """
-        Return tool position (N, 3) and tool z axis (N, 3) for configurations q (N, n_joints).
+        Return tool position (N, 3) and tool axis (N, 3) for configurations q (N, n_joints).
 
         With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
         """
@@ -233,13 +392,19 @@ class ArmModel:
     def _walk(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None,
               jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
         if tail is None:
-            return self._chain(q, self.n_joints, 0, _TOOL_FRAME, jacobian)
-        return self._chain(q, self.planned, 0, tail, jacobian)
+            w, z = self._chain(q, self.n_joints, 0, self._tail, jacobian)
+        else:
+            w, z = self._chain(q, self.planned, 0, tail, jacobian)
+        if not np.array_equal(self.base, np.eye(4)):
+            w, z = _turn(self.base[:3, :3], w, z)
+            w[0] += complex(*self.base[:2, 3])
+            z[0] += self.base[2, 3]
+        return w, z
 
     def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],
                jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
         """
-        Walk joints top-1 .. bottom from frame ``top`` towards the base.
+        Walk joints top-1 .. bottom from frame ``top`` towards the base (B is left to _walk).
 
         This is every optimiser's hot path.
 
@@ -247,11 +412,11 @@ class ArmModel:
         (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool
         point, row 1 the tool axis and, with ``jacobian``, rows 2 + 3i, 3 + 3i and 4 + 3i are
         d(point)/dq_i, d(axis)/dq_i and sign_i times the axis of joint i, for each planned
-        joint i. Per joint it applies
-        v <- Rz(theta) (Rx(alpha) v + (a, 0, d)) (eq. 1) to every row at once (the translation
-        only to the point), the rotation about z as one complex product, so the cost is a few
-        array operations per joint whatever N is. The rows for joint i are born in its own
-        frame as z x v (i v in complex form) and z, then rotated with everything else.
+        joint i. Per joint it applies v <- Rz(theta) (rotation v + translation) to every row at
+        once (the translation only to the point), the rotation about z as one complex product,
+        a DH link's rotation about x on y and z only, so the cost is a few array operations per
+        joint whatever N is. The rows for joint i are born in its own frame as z x v (i v in
+        complex form) and z, then rotated with everything else.
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
         theta = (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top]).T
@@ -264,13 +429,17 @@ class ArmModel:
         w[:2] = tail[0][:, None]
         z[:2] = tail[1][:, None]
         for i in range(top - 1, bottom - 1, -1):
-            ca, sa = self._cos_alpha[i], self._sin_alpha[i]
-            if sa != 0.0 or ca != 1.0:
+            kind, r = self._kinds[i], self.rotations[i]
+            if kind == _ABOUT_X:
+                ca, sa = r[1, 1], r[2, 1]
                 y = w.imag.copy()
                 w.imag = ca * y - sa * z
                 z = sa * y + ca * z
-            w[0] += self.a[i]
-            z[0] += self.d[i]
+            elif kind == _GENERAL:
+                w, z = _turn(r, w, z)
+            tx, ty, tz = self.translations[i]
+            w[0] += complex(tx, ty) if ty else tx
+            z[0] += tz
             w *= rot[i - bottom]
             if jacobian and i < self.planned:
                 w[2 + 3 * i: 4 + 3 * i] = (1j * self.sign[i]) * w[:2]
@@ -278,27 +447,28 @@ class ArmModel:
         return w, z
 
     def frames(self, q: np.ndarray) -> np.ndarray:
-        """Return every frame's homogeneous transform, (N, n_joints + 1, 4, 4); 0 is the base."""
+        """
+        Return the frames of the chain at q (N, n_joints), (N, n_joints + 1, 4, 4).
+
+        Frame i < n_joints is joint i's frame before its turn (its z axis is the joint's axis,
+        frame 0 is B); the last is the tool frame: the tip frame moved to the tool point. For a
+        DH chain they are the DH frames 0..n.
+        """
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        theta = q * self.sign + self.offset
-        ct, st = np.cos(theta), np.sin(theta)
-        n = q.shape[0]
-        link = np.zeros((n, self.n_joints, 4, 4))
-        ca, sa = self._cos_alpha, self._sin_alpha
-        link[..., 0, 0] = ct
-        link[..., 0, 1] = -st * ca
-        link[..., 0, 2] = st * sa
-        link[..., 0, 3] = self.a * ct
-        link[..., 1, 0] = st
-        link[..., 1, 1] = ct * ca
-        link[..., 1, 2] = -ct * sa
-        link[..., 1, 3] = self.a * st
-        link[..., 2, 1] = sa
-        link[..., 2, 2] = ca
-        link[..., 2, 3] = self.d
-        link[..., 3, 3] = 1.0
-        out = np.empty((n, self.n_joints + 1, 4, 4))
-        out[:, 0] = np.eye(4)
+        turn = _transform(_rot_z(q * self.sign + self.offset), np.zeros(3))   # (N, n, 4, 4)
+        link = _transform(self.rotations, self.translations)                    # (n, 4, 4)
+        out = np.empty((q.shape[0], self.n_joints + 1, 4, 4))
+        out[:, 0] = self.base
         for i in range(self.n_joints):
-            out[:, i + 1] = out[:, i] @ link[:, i]
+            out[:, i + 1] = out[:, i] @ turn[:, i] @ link[i]
+        out[:, -1, :3, 3] += out[:, -1, :3, :3] @ self.tool_point
         return out
+
+
+def _turn(r: np.ndarray, w: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Apply the rotation r (3, 3) to vectors stored as (w = x + i y, z), each (rows, N)."""
+    x, y = w.real, w.imag
+    out = np.empty_like(w)
+    out.real = r[0, 0] * x + r[0, 1] * y + r[0, 2] * z
+    out.imag = r[1, 0] * x + r[1, 1] * y + r[1, 2] * z
+    return out, r[2, 0] * x + r[2, 1] * y + r[2, 2] * z

@@ -23,7 +23,7 @@ def paper_arm() -> ArmModel:
     axis and is held.
     """
     deg = np.pi / 180.0
-    return ArmModel(
+    return ArmModel.from_dh(
         a=[0.010, 0.104, 0.096, 0.027, 0.0],
         alpha=[-90 * deg, 0.0, 0.0, 90 * deg, 0.0],
         d=[0.0, 0.0, 0.0, 0.0, 0.137],

@@ -3,14 +3,16 @@
 """
 An arm model as a URDF document, for robot_state_publisher and RViz (``trajplan urdf``).
 
-Joint i of an ``ArmModel`` turns DH frame i-1 into frame i by
-T_i = Rz(sign_i q_i + offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i). In the URDF, link i is DH frame i-1
-turned by theta_i about its z axis, so
+Joint i of an ``ArmModel`` turns its frame by Rz(sign_i q_i + offset_i), then the link transform
+L_i leads to the next joint's frame (for a DH chain L_i = Tz(d_i) Tx(a_i) Rx(alpha_i)). In the
+URDF, link i is joint i's frame turned by theta_i about its z axis, so
 
-* joint i has the origin Tz(d_{i-1}) Tx(a_{i-1}) Rx(alpha_{i-1}) Rz(offset_i) (the rest of the
-  previous transform, then the fixed offset; for joint 1 only Rz(offset_1)) and the axis
-  (0, 0, sign_i): the URDF joint value is the model's q, and the limits are the model's;
-* a fixed joint carries the last Tz(d_n) Tx(a_n) Rx(alpha_n) to ``tool_link``, the DH tool frame.
+* joint i has the origin L_{i-1} Rz(offset_i) (the rest of the previous link transform, then
+  the fixed offset; for joint 1 the base transform B) and the axis (0, 0, sign_i): the URDF
+  joint value is the model's q, and the limits are the model's (a joint without limits is
+  continuous);
+* a fixed joint carries the last L_n and the tool point to ``tool_link``, the DH tool frame
+  (the tool axis is that frame's z axis only when the model's ``tool_axis`` is z).
 
 Visuals are plain shapes sized from the arm's reach: a cylinder for the base, a short cylinder on
 each joint axis, a rod from each joint to the next and a sphere at the tool point.
@@ -43,11 +45,6 @@ def rpy_from_matrix(rot: np.ndarray) -> tuple[float, float, float]:
         roll = float(np.arctan2(rot[2, 1], rot[2, 2]))
         return roll, pitch, float(np.arctan2(rot[1, 0], rot[0, 0]))
     return 0.0, pitch, float(np.arctan2(-rot[0, 1], rot[1, 1]))
-
-
-def _rot_x(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def _rot_z(angle: float) -> np.ndarray:
@@ -88,26 +85,30 @@ def urdf_xml(arm: ArmModel, name: str = 'paper_arm', *, velocity: float,
             (0.0, 0.0, -size / 40))
     parent = 'base_link'
     # the fixed part of the transform still to apply before the next joint: (translation, rotation)
-    shift, turn = np.zeros(3), np.eye(3)
+    shift, turn = arm.base[:3, 3], arm.base[:3, :3]
     for i in range(arm.n_joints):
         child = f'link{i + 1}'
-        joint = ET.SubElement(robot, 'joint', name=arm.joint_names[i], type='revolute')
+        kind = 'continuous' if arm.continuous[i] else 'revolute'
+        joint = ET.SubElement(robot, 'joint', name=arm.joint_names[i], type=kind)
         _origin(joint, shift, rpy_from_matrix(turn @ _rot_z(arm.offset[i])))
         ET.SubElement(joint, 'parent', link=parent)
         ET.SubElement(joint, 'child', link=child)
         ET.SubElement(joint, 'axis', xyz=_num((0.0, 0.0, arm.sign[i])))
-        ET.SubElement(joint, 'limit', lower=_num((arm.lower[i],)), upper=_num((arm.upper[i],)),
-                      effort=_num((effort,)), velocity=_num((velocity,)))
+        limits = ({'lower': _num((arm.lower[i],)), 'upper': _num((arm.upper[i],))}
+                  if kind == 'revolute' else {})
+        ET.SubElement(joint, 'limit', limits, effort=_num((effort,)),
+                      velocity=_num((min(velocity, arm.velocity[i]),)))
         link = ET.SubElement(robot, 'link', name=child)
         _visual(link, 'joint', 'cylinder', {'radius': size / 20, 'length': size / 12},
                 (0.0, 0.0, 0.0))
-        shift = np.array([arm.a[i], 0.0, arm.d[i]])
+        shift, turn = arm.translations[i], arm.rotations[i]
         length = float(np.linalg.norm(shift))
         if length > 0.0:
             _visual(link, 'link', 'cylinder', {'radius': size / 30, 'length': length}, shift / 2,
-                    (0.0, float(np.arctan2(arm.a[i], arm.d[i])), 0.0))
-        turn = _rot_x(arm.alpha[i])
+                    (0.0, float(np.arctan2(np.hypot(shift[0], shift[1]), shift[2])),
+                     float(np.arctan2(shift[1], shift[0]))))
         parent = child
+    shift = shift + turn @ arm.tool_point
     tool_joint = ET.SubElement(robot, 'joint', name='tool_joint', type='fixed')
     _origin(tool_joint, shift, rpy_from_matrix(turn))
     ET.SubElement(tool_joint, 'parent', link=parent)

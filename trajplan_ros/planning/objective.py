@@ -4,7 +4,9 @@
 The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and start.
 
 R (eq. 10) is the motion time when every servo turns at the same angular velocity omega:
-max_i |q_i - q_start_i| / omega over the planned joints. S is the fuzzy rewards-and-punishment
+max_i |q_i - q_start_i| / omega over the planned joints. A joint whose velocity limit is below
+omega turns at its limit instead: R = max_i |q_i - q_start_i| / omega_i with
+omega_i = min(omega, limit_i) (``speeds``; the paper's arm has no such limit). S is the fuzzy rewards-and-punishment
 term on the error (eq. 11, ``fuzzy.RewardPunishment``).
 
 Mode "free" constrains only the tool position. Mode "radial" adds the orientation constraint of
@@ -88,10 +90,16 @@ class Objective:
                                  'ray of eq. (12)-(13) has no direction at the origin')
         self.start = self._check_start(arm, start)
         m = arm.planned
-        self.lower = arm.lower[:m].copy()
-        self.upper = arm.upper[:m].copy()
+        #: The search box: the joint limits, and within pi of the start for a continuous joint
+        #: (an angle and that angle plus 2 pi are the same pose; the nearer one is the goal).
+        self.lower = np.where(np.isfinite(arm.lower[:m]), arm.lower[:m], self.start[:m] - np.pi)
+        self.upper = np.where(np.isfinite(arm.upper[:m]), arm.upper[:m], self.start[:m] + np.pi)
+        #: Each planned joint's angular velocity omega_i (rad/s), and omega / omega_i.
+        self.speeds = arm.speeds(self.omega)[:m]
+        self.time_scale = self.omega / self.speeds
+        self._uniform = bool(np.all(self.time_scale == 1.0))
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
-        self.longest_time = float(np.max(self.upper - self.lower)) / self.omega
+        self.longest_time = float(np.max((self.upper - self.lower) * self.time_scale)) / self.omega
         #: Rows: the goal ray, then two unit vectors across it (radial mode only).
         self.ray_basis = goal_ray_basis(self.goal) if self.radial else np.eye(3)
         self._tail = arm.held_tail(self.start)
@@ -110,10 +118,11 @@ class Objective:
         if not np.all(np.isfinite(g)):
             raise InvalidRequest(f'goal has a non-finite coordinate: {g.tolist()}')
         with np.errstate(over='ignore'):             # a goal of 1e308 is just far away
-            dist = float(np.linalg.norm(g))
+            dist = float(np.linalg.norm(g - arm.reach_centre))
         if dist > arm.reach:
+            where = 'the base' if not arm.reach_centre.any() else 'the first joint'
             raise InvalidRequest(
-                f'goal is {dist:.4f} m from the base, '
+                f'goal is {dist:.4f} m from {where}, '
                 f"beyond the arm's reach of {arm.reach:.4f} m (eq. 14)")
         return g
 
@@ -180,8 +189,10 @@ class Objective:
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
-        """Return R of eq. (10), max_i |x_i - start_i| / omega, for x (N, planned)."""
+        """Return R of eq. (10), max_i |x_i - start_i| / omega_i, for x (N, planned)."""
         moved = np.abs(x - self.start[: self.arm.planned])
+        if not self._uniform:
+            moved = moved * self.time_scale
         # a fold over the few joints is several times faster than np.max(..., axis=1)
         return functools.reduce(np.maximum, moved.T) / self.omega
 

@@ -87,7 +87,7 @@ class PlanResult:
         """Return the fixed-angular-velocity joint trajectory from the start to the joint goal."""
         if self.joint_goal is None or self.start is None:
             raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
-        return servo_trajectory(self.start, self.joint_goal, self.omega,
+        return servo_trajectory(self.start, self.joint_goal, arm.speeds(self.omega),
                                 sample_period=sample_period, joint_names=arm.joint_names)
 
     def to_dict(self) -> dict[str, Any]:

@@ -181,7 +181,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     early when it returns True (each candidate's motion time, s, and constraint error, m, and
     whether its steps are still being accepted, not stalled by repeated rejections).
     """
-    lo, hi = obj.lower, obj.upper
+    lo, hi, scale = obj.lower, obj.upper, obj.time_scale
     start = obj.start[: obj.arm.planned]
     x = np.clip(np.array(x, dtype=float, ndmin=2), lo, hi)
     k = x.shape[0]
@@ -206,7 +206,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
             zhi = functools.reduce(
                 np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, delta)
             zhi = np.maximum(zhi, zlo)
-            z = _line_minimax(base - start, direction, half_curv, zlo, zhi)[:, None]
+            z = _line_minimax((base - start) * scale, direction * scale, half_curv * scale,
+                              zlo, zhi)[:, None]
             base = base + (direction + half_curv * z) * z
         trial = np.clip(base, lo, hi)
         # second-order correction

@@ -37,17 +37,22 @@ def radial_angle(goal: np.ndarray) -> float:
 
 def _check_family(arm: ArmModel) -> None:
     half = np.pi / 2
-    ok = (arm.planned == 4 and arm.n_joints == 5 and np.isclose(arm.alpha[0], -half)
-          and np.allclose(arm.alpha[1:3], 0.0) and np.isclose(arm.alpha[3], half)
-          and np.allclose(arm.d[:4], 0.0) and arm.a[4] == 0.0)
+    dh = arm.dh
+    ok = dh is not None and arm.planned == 4 and arm.n_joints == 5
+    if ok:
+        a, alpha, d = dh
+        ok = (np.isclose(alpha[0], -half) and np.allclose(alpha[1:3], 0.0)
+              and np.isclose(alpha[3], half) and np.allclose(d[:4], 0.0) and a[4] == 0.0
+              and np.all(arm.velocity[:4] == np.inf))
     if not ok:
         raise ValueError("exact_minimum only knows arms shaped like the paper's (Table 3)")
 
 
 def _solutions(arm: ArmModel, goal: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Return all exact solutions q (len(phi), 4 branches, 4) for each phi; NaN where none."""
-    a1, a2, a3, a4 = arm.a[:4]
-    d5 = arm.d[4]
+    a, _, d = arm.dh
+    a1, a2, a3, a4 = a[:4]
+    d5 = d[4]
     x, y, z = goal
     rho = np.hypot(x, y)
     out = np.full((phi.size, 4, 4), np.nan)

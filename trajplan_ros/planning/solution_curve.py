@@ -203,13 +203,14 @@ def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np
     Between two neighbouring samples each joint is taken to move monotonically, give or take a
     tenth of the sample spacing (the curve bends between samples): its displacement is then no
     smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
-    displacement over omega. A sample is bounded over the stretches on either side of it, a
+    displacement over its joint's omega_i. A sample is bounded over the stretches on either side of it, a
     point between two samples over theirs.
     """
-    moved = samples - obj.start[: samples.shape[2]]
+    moved = (samples - obj.start[: samples.shape[2]]) * obj.time_scale
     a, b = moved[:, :-1], moved[:, 1:]
     least = np.where(a * b <= 0.0, 0.0, np.minimum(np.abs(a), np.abs(b)))
-    stretch = (np.max(least, axis=2) - 0.1 * spacing[:, None]) / obj.omega      # (K, S - 1)
+    slack = 0.1 * spacing[:, None] * obj.time_scale.max()
+    stretch = (np.max(least, axis=2) - slack) / obj.omega                          # (K, S - 1)
     padded = np.pad(stretch, ((0, 0), (1, 1)), constant_values=np.inf)
     at_samples = np.minimum(padded[:, :-1], padded[:, 1:])                       # (K, S)
     between = np.repeat(stretch, 3, axis=1).reshape(len(samples), -1, 3)

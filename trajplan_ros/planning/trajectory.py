@@ -4,7 +4,8 @@
 Joint trajectory of the paper's servo model: every joint turns at one fixed angular velocity.
 
 Joint i leaves q_start_i at t = 0 towards q_goal_i at +-omega and stops when it arrives, at
-t_i = |q_goal_i - q_start_i| / omega; the motion ends at R = max_i t_i (eq. 10). The trajectory
+t_i = |q_goal_i - q_start_i| / omega (omega may be one per joint: a joint whose velocity limit is
+lower turns at its limit, ``ArmModel.speeds``); the motion ends at R = max_i t_i (eq. 10). The trajectory
 is sampled every ``sample_period`` seconds, plus one point at each joint's arrival and at the
 end, so the samples are exact corners of the motion. Points carry positions and velocities;
 the last has zero velocity everywhere. Times are strictly increasing and above zero, the form
@@ -47,21 +48,27 @@ class Trajectory:
         return np.stack([np.interp(t, times, pos[:, j]) for j in range(pos.shape[1])], axis=-1)
 
 
-def _motion(start: np.ndarray, goal: np.ndarray, omega: float,
+def _motion(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,
             sample_period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Check the arguments; return start, goal, each joint's arrival time and the duration R."""
+    """
+    Check the arguments; return start, goal, each joint's arrival time and the duration R.
+
+    ``omega`` is one angular velocity for every joint or one per joint (rad/s).
+    """
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float)
     if start.shape != goal.shape or start.ndim != 1:
         raise ValueError('start and goal must be joint vectors of the same length')
-    if not (np.isfinite(omega) and omega > 0
+    omega = np.asarray(omega, dtype=float)
+    if not (np.all(np.isfinite(omega)) and np.all(omega > 0)
+            and omega.shape in ((), start.shape)
             and np.isfinite(sample_period) and sample_period > 0):
         raise ValueError('omega and sample_period must be finite and positive')
     arrive = np.abs(goal - start) / omega
     return start, goal, arrive, float(arrive.max())
 
 
-def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
+def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray, *,
                      sample_period: float = 0.1,
                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
     """
@@ -91,7 +98,7 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float, *,
     return Trajectory(tuple(names), t, positions, velocities)
 
 
-def trajectory_points(start: np.ndarray, goal: np.ndarray, omega: float,
+def trajectory_points(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,
                       sample_period: float = 0.1) -> int:
     """
     Return how many points ``servo_trajectory`` gives for these arguments, without building it.

@@ -63,7 +63,8 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     if not result.success:
         return Outcome(False, _refusal(where, result, took), plan_time_s=timed,
                        timed_out=result.status is PlanStatus.TIMED_OUT)
-    points = trajectory_points(result.start, result.joint_goal, s.omega, s.sample_period)
+    points = trajectory_points(result.start, result.joint_goal, s.arm.speeds(s.omega),
+                               s.sample_period)
     if points > s.max_trajectory_points:
         return Outcome(False, f'{where}: refused: the trajectory would need {points} points, '
                               f'more than max_trajectory_points {s.max_trajectory_points} '

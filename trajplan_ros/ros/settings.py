@@ -36,13 +36,16 @@ class ParameterSpec:
 
 def _arm_specs() -> list[ParameterSpec]:
     arm = paper_arm()
+    a, alpha, d = arm.dh
+    values = {'a': a, 'alpha': alpha, 'd': d, 'offset': arm.offset, 'lower': arm.lower,
+              'upper': arm.upper}
     vectors = {
         'a': 'DH link lengths a_i, m', 'alpha': 'DH link twists alpha_i, rad',
         'd': 'DH link offsets d_i, m',
         'offset': 'joint angle offsets, rad (theta_i = sign_i q_i + offset_i)',
         'lower': 'lower joint limits on q, rad', 'upper': 'upper joint limits on q, rad',
     }
-    specs = [ParameterSpec(f'arm.{key}', getattr(arm, key).tolist(), f'{meaning}, one per joint')
+    specs = [ParameterSpec(f'arm.{key}', values[key].tolist(), f'{meaning}, one per joint')
              for key, meaning in vectors.items()]
     return specs + [
         ParameterSpec('arm.sign', [int(s) for s in arm.sign],
@@ -122,10 +125,11 @@ class Settings:
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> Settings:
         """Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused."""
-        arm = ArmModel(*(values[f'arm.{k}'] for k in ('a', 'alpha', 'd')),
-                       sign=values['arm.sign'], offset=values['arm.offset'],
-                       lower=values['arm.lower'], upper=values['arm.upper'],
-                       joint_names=list(values['arm.joint_names']), planned=values['arm.planned'])
+        arm = ArmModel.from_dh(*(values[f'arm.{k}'] for k in ('a', 'alpha', 'd')),
+                               sign=values['arm.sign'], offset=values['arm.offset'],
+                               lower=values['arm.lower'], upper=values['arm.upper'],
+                               joint_names=list(values['arm.joint_names']),
+                               planned=values['arm.planned'])
         for spec in PARAMETERS:
             if spec.choices and values[spec.name] not in spec.choices:
                 raise ValueError(f"{spec.name} must be one of {', '.join(spec.choices)}, "
