@@ -18,11 +18,10 @@ from typing import Sequence
 
 import numpy as np
 
+from trajplan_ros.kinematics.errors import InvalidArmModel
+from trajplan_ros.kinematics.urdf_import import read_chain
+
 __all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
-
-
-class InvalidArmModel(ValueError):
-    """The arm description is not a usable chain (reason in the message)."""
 
 
 def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
@@ -290,9 +289,11 @@ class ArmModel:
         planned; the tool point is the tip link's origin plus ``tool_offset`` (m, tip frame) and
         the tool axis ``tool_axis`` (tip frame). Raises InvalidArmModel with a one-line reason.
         """
-        from trajplan_ros.kinematics.urdf_import import chain_from_urdf
-        return chain_from_urdf(cls, urdf, base_link, tip_link, tool_offset=tool_offset,
-                               tool_axis=tool_axis)
+        chain = read_chain(urdf, base_link, tip_link)
+        return cls(chain.rotations, chain.translations, base=chain.base, tool_point=tool_offset,
+                   tool_axis=tool_axis, lower=chain.lower, upper=chain.upper,
+                   velocity=chain.velocity, joint_names=chain.joint_names,
+                   base_link=chain.base_link, tip_link=chain.tip_link)
 
     @property
     def n_joints(self) -> int:
@@ -333,7 +334,7 @@ class ArmModel:
         return self.translations[:, 0], np.arctan2(r[:, 2, 1], r[:, 1, 1]), self.translations[:, 2]
 
     def speeds(self, omega: float) -> np.ndarray:
-        """Return each joint's angular velocity (rad/s) for servo velocity omega: min(omega, limit)."""
+        """Return each joint's angular velocity at servo velocity omega: min(omega, limit), rad/s."""
         return np.minimum(float(omega), self.velocity)
 
     def full_start(self, angles: Sequence[float]) -> np.ndarray:

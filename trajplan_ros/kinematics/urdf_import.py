@@ -23,17 +23,17 @@ base (ignoring fixed links after it); when there are several, the refusal lists 
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import io
 import os
-from typing import Sequence
 
 import defusedxml.ElementTree
 import numpy as np
+
+from trajplan_ros.kinematics.errors import InvalidArmModel
 import yourdfpy
 
-from trajplan_ros.kinematics.arm import ArmModel, InvalidArmModel
-
-__all__ = ['MAX_BYTES', 'MAX_LINKS', 'chain_from_urdf', 'read_urdf']
+__all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'read_chain', 'read_urdf']
 
 #: Largest URDF accepted, bytes.
 MAX_BYTES = 10 * 1024 * 1024
@@ -175,11 +175,24 @@ def _joint_values(joint: yourdfpy.Joint) -> tuple[np.ndarray, float, float, floa
     return _to_axis(axis / size), lower, upper, velocity
 
 
-def chain_from_urdf(cls: type[ArmModel], urdf: str | os.PathLike | bytes,
-                    base_link: str | None = None, tip_link: str | None = None, *,
-                    tool_offset: Sequence[float] = (0.0, 0.0, 0.0),
-                    tool_axis: Sequence[float] = (0.0, 0.0, 1.0)) -> ArmModel:
-    """Return the ``cls`` chain of a URDF (see the module docstring; ``ArmModel.from_urdf``)."""
+@dataclass(frozen=True)
+class UrdfChain:
+    """The parts of an ``ArmModel`` read from a URDF (see ``ArmModel.__init__``)."""
+
+    rotations: np.ndarray
+    translations: np.ndarray
+    base: np.ndarray
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    velocity: tuple[float, ...]
+    joint_names: tuple[str, ...]
+    base_link: str
+    tip_link: str
+
+
+def read_chain(urdf: str | os.PathLike | bytes, base_link: str | None = None,
+               tip_link: str | None = None) -> UrdfChain:
+    """Return the chain of a URDF (see the module docstring; ``ArmModel.from_urdf``)."""
     robot = read_urdf(urdf)
     parents = _parents(robot)
     known = {link.name for link in robot.links}
@@ -212,6 +225,5 @@ def chain_from_urdf(cls: type[ArmModel], urdf: str | os.PathLike | bytes,
     links.append(pending)
     after = np.stack(links[1:])
     names, lower, upper, velocity = zip(*values)
-    return cls(after[:, :3, :3], after[:, :3, 3], base=links[0], tool_point=tool_offset,
-               tool_axis=tool_axis, lower=lower, upper=upper, velocity=velocity,
-               joint_names=names, base_link=base, tip_link=tip)
+    return UrdfChain(after[:, :3, :3], after[:, :3, 3], links[0], lower, upper, velocity, names,
+                     base, tip)

@@ -6,8 +6,8 @@ The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and st
 R (eq. 10) is the motion time when every servo turns at the same angular velocity omega:
 max_i |q_i - q_start_i| / omega over the planned joints. A joint whose velocity limit is below
 omega turns at its limit instead: R = max_i |q_i - q_start_i| / omega_i with
-omega_i = min(omega, limit_i) (``speeds``; the paper's arm has no such limit). S is the fuzzy rewards-and-punishment
-term on the error (eq. 11, ``fuzzy.RewardPunishment``).
+omega_i = min(omega, limit_i) (``speeds``; the paper's arm has no such limit). S is the fuzzy
+rewards-and-punishment term on the error (eq. 11, ``fuzzy.RewardPunishment``).
 
 Mode "free" constrains only the tool position. Mode "radial" adds the orientation constraint of
 eq. (12)-(13): the tool sweeps from upright by eps = arccos(z . p / |z||p|) towards the goal, so

@@ -203,8 +203,8 @@ def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np
     Between two neighbouring samples each joint is taken to move monotonically, give or take a
     tenth of the sample spacing (the curve bends between samples): its displacement is then no
     smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
-    displacement over its joint's omega_i. A sample is bounded over the stretches on either side of it, a
-    point between two samples over theirs.
+    displacement over its joint's omega_i. A sample is bounded over the stretches on either side
+    of it, a point between two samples over theirs.
     """
     moved = (samples - obj.start[: samples.shape[2]]) * obj.time_scale
     a, b = moved[:, :-1], moved[:, 1:]
