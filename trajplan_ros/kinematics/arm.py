@@ -334,7 +334,7 @@ class ArmModel:
         return self.translations[:, 0], np.arctan2(r[:, 2, 1], r[:, 1, 1]), self.translations[:, 2]
 
     def speeds(self, omega: float) -> np.ndarray:
-        """Return each joint's angular velocity at servo velocity omega: min(omega, limit), rad/s."""
+        """Return each joint's angular velocity (rad/s) at servo velocity omega."""
         return np.minimum(float(omega), self.velocity)
 
     def full_start(self, angles: Sequence[float]) -> np.ndarray:

@@ -8,8 +8,8 @@ t_i = |q_goal_i - q_start_i| / omega (omega may be one per joint: a joint whose 
 lower turns at its limit, ``ArmModel.speeds``); the motion ends at R = max_i t_i (eq. 10). The
 trajectory is sampled every ``sample_period`` seconds, plus one point at each joint's arrival
 and at the end, so the samples are exact corners of the motion. Points carry positions and
-velocities; the last has zero velocity everywhere. Times are strictly increasing and above zero, the form
-joint_trajectory_controller accepts (the first point is not the start itself).
+velocities; the last has zero velocity everywhere. Times are strictly increasing and above
+zero, the form joint_trajectory_controller accepts (the first point is not the start itself).
 ``trajectory_points`` counts those points without building them, to refuse a long trajectory
 first.
 """
