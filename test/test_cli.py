@@ -7,6 +7,7 @@ import sys
 
 import pytest
 from trajplan_ros.planning import planner
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
 from trajplan_ros.tools.cli import main
 
 
@@ -97,3 +98,44 @@ def test_a_radial_goal_at_the_origin_is_refused_without_warnings(capsys):
     record = json.loads(captured.out)
     assert record['status'] == 'rejected' and 'away from the base origin' in record['message']
     assert captured.err == ''
+
+
+def test_plan_for_a_published_urdf_names_its_joints(tmp_path, capsys):
+    so101 = PUBLISHED['so101']
+    goals = tmp_path / 'goals.csv'
+    goals.write_text('0.2,0.1,0.15\n0.2,0.1,0.15,0.1,0.2,0.3,0.1,0.0\n0.2,0.1,0.15,0.1,0.2\n')
+    argv = ['plan', '--goals', str(goals), '--json', '--urdf', str(so101.urdf),
+            '--base-link', so101.base_link, '--tip-link', so101.tip_link]
+    assert main(argv) == 1
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert all(r['joint_names'] == ['shoulder_pan', 'shoulder_lift', 'elbow_flex',
+                                    'wrist_flex', 'wrist_roll'] for r in lines)
+    assert [r['success'] for r in lines] == [True, True, False]
+    assert len(lines[0]['joint_goal']) == 5
+    assert 'a start needs 5 joint angles, got 2' in lines[2]['message']
+
+
+def test_planning_from_trajplan_urdf_output_matches_the_dh_model(tmp_path, capsys):
+    urdf = tmp_path / 'paper_arm.urdf'
+    assert main(['urdf', '-o', str(urdf)]) == 0
+    for goal in (TARGET, ['0.12', '-0.1', '0.25'], ['-0.05', '0.15', '0.05']):
+        capsys.readouterr()
+        assert main(['plan', *goal, '--json']) == 0
+        dh = json.loads(capsys.readouterr().out)
+        assert main(['plan', *goal, '--json', '--urdf', str(urdf), '--tip-link', 'tool_link']) == 0
+        chain = json.loads(capsys.readouterr().out)
+        assert chain['joint_names'] == dh['joint_names']
+        assert chain['motion_time_s'] == pytest.approx(dh['motion_time_s'], rel=1e-6)
+        assert chain['joint_goal'][:4] == pytest.approx(dh['joint_goal'][:4], abs=1e-5)
+
+
+@pytest.mark.parametrize('argv, reason', [
+    (['--tip-link', 'x'], '--tip-link needs --urdf'),
+    (['--urdf', '/no/such.urdf'], 'cannot read the URDF'),
+    (['--urdf', '{so101}', '--tip-link', 'nowhere'], "unknown link 'nowhere'"),
+])
+def test_bad_arm_arguments_exit_2_with_one_line(argv, reason, capsys):
+    argv = [a.replace('{so101}', str(PUBLISHED['so101'].urdf)) for a in argv]
+    assert main(['plan', *TARGET, *argv]) == 2
+    err = capsys.readouterr().err
+    assert reason in err and err.count('\n') == 1

@@ -3,7 +3,6 @@
 """Chains from URDF: published vendor arms, the paper arm's own URDF, refusals, untrusted text."""
 from __future__ import annotations
 
-import importlib.metadata
 from pathlib import Path
 import time
 
@@ -14,23 +13,12 @@ from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning import plan
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
 import yourdfpy
 
-ROBOTS = Path(importlib.metadata.distribution('example-robot-data').locate_file(
-    'cmeel.prefix/share/example-robot-data/robots'))
-#: Published arms (example-robot-data): file, base link, tip link, revolute joints.
-PUBLISHED = {
-    'so101': ('so_arm_description/urdf/so101.urdf', 'base_link', 'gripper_frame_link', 5),
-    'ur5': ('ur_description/urdf/ur5_robot.urdf', 'base_link', 'tool0', 6),
-    'xarm7': ('xarm_description/urdf/xarm7.urdf', 'link_base', 'link_eef', 7),
-    'panda': ('panda_description/urdf/panda.urdf', 'panda_link0', 'panda_hand_tcp', 7),
-    'kinova': ('kinova_description/robots/kinova.urdf', 'base', 'j2s6s200_end_effector', 6),
-}
-
-
 def published(name: str, **kwargs) -> ArmModel:
-    path, base, tip, _ = PUBLISHED[name]
-    return ArmModel.from_urdf(ROBOTS / path, base, tip, **kwargs)
+    arm = PUBLISHED[name]
+    return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link, **kwargs)
 
 
 def _samples(arm: ArmModel, rng: np.random.Generator, n: int) -> np.ndarray:
@@ -41,10 +29,10 @@ def _samples(arm: ArmModel, rng: np.random.Generator, n: int) -> np.ndarray:
 
 @pytest.mark.parametrize('name', sorted(PUBLISHED))
 def test_fk_agrees_with_yourdfpy_on_published_arms(name: str) -> None:
-    path, base, tip, joints = PUBLISHED[name]
+    base, tip = PUBLISHED[name].base_link, PUBLISHED[name].tip_link
     arm = published(name, tool_offset=(0.01, -0.02, 0.03))
-    assert arm.n_joints == arm.planned == joints
-    other = yourdfpy.URDF.load(str(ROBOTS / path), build_scene_graph=True, load_meshes=False,
+    assert arm.n_joints == arm.planned == PUBLISHED[name].joints
+    other = yourdfpy.URDF.load(str(PUBLISHED[name].urdf), build_scene_graph=True, load_meshes=False,
                                load_collision_meshes=False)
     rng = np.random.default_rng(7)
     q = _samples(arm, rng, 40)
@@ -101,10 +89,10 @@ def test_planning_from_the_paper_arms_urdf_gives_the_same_answers() -> None:
 
 
 def test_automatic_base_and_tip() -> None:
-    arm = ArmModel.from_urdf(ROBOTS / PUBLISHED['ur5'][0])        # root: world
+    arm = ArmModel.from_urdf(PUBLISHED['ur5'].urdf)        # root: world
     assert (arm.base_link, arm.tip_link) == ('world', 'wrist_3_link')
     # the Panda's fingers are prismatic, on side branches: the revolute chain ends at link 7
-    panda = ArmModel.from_urdf(ROBOTS / PUBLISHED['panda'][0])
+    panda = ArmModel.from_urdf(PUBLISHED['panda'].urdf)
     assert panda.tip_link == 'panda_link7' and panda.n_joints == 7
 
 
@@ -190,3 +178,19 @@ def test_untrusted_text_is_refused_quickly_without_reading_files(tmp_path: Path)
         with pytest.raises(InvalidArmModel, match=reason):
             ArmModel.from_urdf(text)
         assert time.monotonic() - began < 1.0
+
+
+def test_a_wrist_roll_plans_only_when_it_can_move_the_tool() -> None:
+    chain = ArmModel.from_urdf(urdf_xml(paper_arm(), velocity=DEFAULT_OMEGA), 'base_link',
+                               'tool_link')
+    assert chain.planned == 5
+    # the paper arm's joint 5 turns the tool about its own axis: held in both modes
+    assert chain.without_idle_tail(axis=False).planned == 4
+    assert chain.without_idle_tail(axis=True).planned == 4
+    offset = ArmModel.from_urdf(urdf_xml(paper_arm(), velocity=DEFAULT_OMEGA), 'base_link',
+                                'tool_link', tool_offset=(0.02, 0.0, 0.0))
+    assert offset.without_idle_tail(axis=False) is offset
+    sideways = ArmModel.from_urdf(urdf_xml(paper_arm(), velocity=DEFAULT_OMEGA), 'base_link',
+                                  'tool_link', tool_axis=(1.0, 0.0, 0.0))
+    assert sideways.without_idle_tail(axis=False).planned == 4
+    assert sideways.without_idle_tail(axis=True) is sideways

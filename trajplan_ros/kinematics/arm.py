@@ -333,6 +333,33 @@ class ArmModel:
         r = self.rotations
         return self.translations[:, 0], np.arctan2(r[:, 2, 1], r[:, 1, 1]), self.translations[:, 2]
 
+    def without_idle_tail(self, axis: bool) -> ArmModel:
+        """
+        Return the arm with its trailing joints that cannot move the tool held (not planned).
+
+        Joint i cannot move the tool point when the point lies on its axis whatever the joints
+        after it do (they cannot move it either); with ``axis`` the tool axis must also lie
+        along joint i's axis. Returns self when every planned joint can move the tool.
+        """
+        planned = self.planned
+        point, direction = self.tool_point, self.tool_axis
+        for i in range(self.n_joints - 1, 0, -1):
+            point = self.rotations[i] @ point + self.translations[i]    # in joint i's frame
+            direction = self.rotations[i] @ direction
+            still = np.hypot(point[0], point[1]) <= 1e-12 * max(1.0, self.reach)
+            if axis:
+                still &= np.hypot(direction[0], direction[1]) <= 1e-12
+            if not still:
+                break
+            planned = min(planned, i)
+        if planned == self.planned or planned < 2:
+            return self
+        return ArmModel(self.rotations, self.translations, base=self.base,
+                        tool_point=self.tool_point, tool_axis=self.tool_axis, sign=self.sign,
+                        offset=self.offset, lower=self.lower, upper=self.upper,
+                        velocity=self.velocity, joint_names=self.joint_names, planned=planned,
+                        base_link=self.base_link, tip_link=self.tip_link)
+
     def speeds(self, omega: float) -> np.ndarray:
         """Return each joint's angular velocity (rad/s) at servo velocity omega."""
         return np.minimum(float(omega), self.velocity)

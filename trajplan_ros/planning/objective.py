@@ -89,6 +89,10 @@ class Objective:
             raise InvalidRequest('radial mode needs a goal away from the base origin: the goal '
                                  'ray of eq. (12)-(13) has no direction at the origin')
         self.start = self._check_start(arm, start)
+        #: The arm as planned: trailing joints that cannot move the tool point (nor, in radial
+        #: mode, the tool axis), such as a wrist roll about the tool axis, keep their start
+        #: angle, as moving them could only add time.
+        self.arm = arm = arm.without_idle_tail(self.radial)
         m = arm.planned
         #: The search box: the joint limits, and within pi of the start for a continuous joint
         #: (an angle and that angle plus 2 pi are the same pose; the nearer one is the goal).

@@ -6,8 +6,10 @@ from __future__ import annotations
 import argparse
 import math
 
+from trajplan_ros.kinematics import ArmModel, paper_arm
 
-__all__ = ['UsageError', 'finite_number', 'positive_count']
+__all__ = ['UsageError', 'add_arm_arguments', 'arm_from_arguments', 'finite_number',
+           'positive_count']
 
 
 class UsageError(Exception):
@@ -34,3 +36,31 @@ def positive_count(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f'must be at least 1, got {value}')
     return value
+
+
+def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add --urdf, --base-link, --tip-link, --tool-offset and --tool-axis (default: paper arm)."""
+    group = parser.add_argument_group('arm (default: the paper arm, DH)')
+    group.add_argument('--urdf', metavar='FILE',
+                       help="plan for the chain of this URDF: every revolute joint from the base "
+                            "link to the tip link (joint names and limits from the file)")
+    group.add_argument('--base-link', metavar='NAME', help='chain start (default: the URDF root)')
+    group.add_argument('--tip-link', metavar='NAME',
+                       help='chain end (default: where the only chain of revolute joints ends)')
+    group.add_argument('--tool-offset', nargs=3, type=finite_number, metavar=('X', 'Y', 'Z'),
+                       default=(0.0, 0.0, 0.0), help='tool point in the tip frame, m')
+    group.add_argument('--tool-axis', nargs=3, type=finite_number, metavar=('X', 'Y', 'Z'),
+                       default=(0.0, 0.0, 1.0), help='tool axis in the tip frame (radial mode)')
+
+
+def arm_from_arguments(args: argparse.Namespace) -> ArmModel:
+    """Return the arm the arguments name (InvalidArmModel, a ValueError, with the reason)."""
+    if args.urdf is None:
+        given = [flag for flag, value in (('--base-link', args.base_link),
+                                          ('--tip-link', args.tip_link)) if value is not None]
+        if given or tuple(args.tool_offset) != (0.0, 0.0, 0.0) or tuple(args.tool_axis) != (
+                0.0, 0.0, 1.0):
+            raise UsageError(f"{', '.join(given) or '--tool-offset/--tool-axis'} needs --urdf")
+        return paper_arm()
+    return ArmModel.from_urdf(args.urdf, args.base_link, args.tip_link,
+                              tool_offset=args.tool_offset, tool_axis=args.tool_axis)

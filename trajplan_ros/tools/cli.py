@@ -11,13 +11,14 @@ import sys
 from typing import Any, Iterator, Sequence
 
 import numpy as np
-from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus)
 from trajplan_ros.tools import bench, demo, figures, node_commands
-from trajplan_ros.tools.arguments import finite_number, UsageError
+from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, finite_number,
+                                          UsageError)
 
 
 __all__ = ['main', 'build_parser']
@@ -25,7 +26,8 @@ __all__ = ['main', 'build_parser']
 
 def _add_plan(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser('plan', help='plan the joint goal and motion for tool positions',
-                       description='Plan with the default (paper) arm. Units: metres, radians.')
+                       description='Plan with the paper arm or a URDF chain (--urdf). Units: '
+                                   'metres, radians.')
     p.add_argument('xyz', nargs='*', type=finite_number, metavar='X Y Z',
                    help='goal position of the tool in metres (omit with --goals)')
     p.add_argument('--goals', metavar='FILE',
@@ -45,6 +47,7 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                    help='longest search per goal in seconds; past it the plan ends as timed_out '
                         'with its best answer (default: no limit)')
     p.add_argument('--json', action='store_true', help='print one JSON object a line')
+    add_arm_arguments(p)
     p.set_defaults(run=_run_plan)
 
 
@@ -115,11 +118,12 @@ def _parse_line(cells: list[str]) -> tuple[np.ndarray, np.ndarray | None]:
     return np.array(values[:3]), start
 
 
-def _human(result: PlanResult) -> str:
+def _human(result: PlanResult, arm: ArmModel) -> str:
     goal = ', '.join(f'{v:.6g}' for v in result.goal)
     lines = [f'goal ({goal}) m: {result.status.value}: {result.message}']
     if result.joint_goal is not None:
-        lines.append('joint goal [rad]: ' + ' '.join(f'{v:+.6f}' for v in result.joint_goal))
+        lines.append('joint goal [rad]: ' + '  '.join(
+            f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
         lines.append(f'motion time {result.motion_time_s:.4f} s, position error '
                      f'{result.position_error_m:.3g} m, efficiency F {result.efficiency:.4f}, '
                      f'{result.iterations} iterations, '
@@ -127,20 +131,25 @@ def _human(result: PlanResult) -> str:
     return '\n'.join(lines)
 
 
-def _record(result: PlanResult, line: int | None) -> dict[str, Any]:
-    """Return the JSON line of a plan: the same keys every time (null where no value)."""
-    return {'line': line, **result.to_dict()}
+def _record(result: PlanResult, line: int | None, arm: ArmModel) -> dict[str, Any]:
+    """
+    Return the JSON line of a plan: the same keys every time (null where no value).
+
+    ``joint_names`` names the entries of ``joint_goal``: the chain's joints from the base.
+    """
+    return {'line': line, **result.to_dict(), 'joint_names': list(arm.joint_names)}
 
 
-def _unparsed(line: int, reason: str, args: argparse.Namespace) -> dict[str, Any]:
+def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
+              ) -> dict[str, Any]:
     """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
                           start=None, algorithm=args.algorithm, mode=args.mode)
-    return {**_record(rejected, line), 'goal': None}
+    return {**_record(rejected, line, arm), 'goal': None}
 
 
 def _run_plan(args: argparse.Namespace) -> int:
-    arm = paper_arm()
+    arm = arm_from_arguments(args)
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
                 'max_planning_time': args.max_planning_time}
@@ -150,7 +159,7 @@ def _run_plan(args: argparse.Namespace) -> int:
                              f'got {len(args.xyz)} number(s)')
         start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
         result = plan(args.xyz, start, **settings)
-        print(json.dumps(_record(result, None)) if args.json else _human(result))
+        print(json.dumps(_record(result, None, arm)) if args.json else _human(result, arm))
         return 0 if result.success else 1
     if args.xyz:
         raise UsageError('give either X Y Z or --goals FILE, not both')
@@ -164,14 +173,14 @@ def _run_plan(args: argparse.Namespace) -> int:
             goal, start = _parse_line(cells)
         except UsageError as exc:
             failures += 1
-            record = _unparsed(number, str(exc), args)
+            record = _unparsed(number, str(exc), args, arm)
             print(json.dumps(record) if args.json else record['message'])
             continue
         if start is None:
             start = args.start
         result = plan(goal, start, **settings)
         failures += not result.success
-        print(json.dumps(_record(result, number)) if args.json else _human(result))
+        print(json.dumps(_record(result, number, arm)) if args.json else _human(result, arm))
     return 0 if failures == 0 else 1
 
 
