@@ -13,7 +13,7 @@ from trajplan_ros.planning.solution_curve import (_limit_crossings, curve_constr
                                                   curve_seeds, follow)
 
 ARM = paper_arm()
-SIX = ArmModel.from_dh(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.0],
+SIX = ArmModel.from_dh(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.05],
                        alpha=[np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
                        d=[0.2, 0, 0, 0.15, 0, 0.1], lower=np.full(6, -2.6), upper=np.full(6, 2.6))
 

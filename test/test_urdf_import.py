@@ -16,6 +16,7 @@ from trajplan_ros.planning.objective import DEFAULT_OMEGA
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 import yourdfpy
 
+
 def published(name: str, **kwargs) -> ArmModel:
     arm = PUBLISHED[name]
     return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link, **kwargs)
@@ -32,8 +33,8 @@ def test_fk_agrees_with_yourdfpy_on_published_arms(name: str) -> None:
     base, tip = PUBLISHED[name].base_link, PUBLISHED[name].tip_link
     arm = published(name, tool_offset=(0.01, -0.02, 0.03))
     assert arm.n_joints == arm.planned == PUBLISHED[name].joints
-    other = yourdfpy.URDF.load(str(PUBLISHED[name].urdf), build_scene_graph=True, load_meshes=False,
-                               load_collision_meshes=False)
+    other = yourdfpy.URDF.load(str(PUBLISHED[name].urdf), build_scene_graph=True,
+                               load_meshes=False, load_collision_meshes=False)
     rng = np.random.default_rng(7)
     q = _samples(arm, rng, 40)
     p, u = arm.tool(q)

@@ -21,12 +21,23 @@ from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
-__all__ = ['Outcome', 'describe_goal', 'run']
+__all__ = ['Outcome', 'describe_arm', 'describe_goal', 'run']
 
 
 def describe_goal(xyz: Sequence[float]) -> str:
     """Write a point as the node's log lines do."""
     return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
+
+
+def describe_arm(settings: Settings) -> str:
+    """Write the arm in use and, for a URDF, which settings it overrides (the node logs it)."""
+    arm = settings.arm
+    joints = f"{arm.n_joints}-joint arm ({', '.join(arm.joint_names)})"
+    if not settings.description:
+        return f'{joints} from the arm.* DH parameters'
+    return (f'{joints} from robot_description, chain {arm.base_link} -> {arm.tip_link}, '
+            f"frame '{settings.base_frame}': the arm.* parameters are ignored, every chain "
+            'joint is planned, start_positions must list these joints')
 
 
 @dataclass

@@ -13,6 +13,12 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
 * ``joint_trajectory`` (out), ``planned_path`` (nav_msgs/msg/Path, out, for RViz),
   ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
+* ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal,
+  refused with a logged reason unless its frame is ``base_frame`` (or empty).
+* ``robot_description`` (std_msgs/msg/String, in; reliable, transient local, depth 1, as
+  robot_state_publisher offers it): a URDF; unless the ``robot_description`` parameter is set,
+  the arm is built from it for the next plan. A refused description is logged and the arm in
+  use is kept (``ros.settings`` says which settings a description overrides).
 
 Concurrency, all of it:
 
@@ -44,7 +50,7 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Point, PoseStamped
+from geometry_msgs.msg import Point, PointStamped, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
@@ -56,11 +62,12 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile,
+                       ReliabilityPolicy)
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Header
+from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.ros import job as jobs
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
@@ -74,6 +81,9 @@ __all__ = ['PlannerNode', 'main']
 
 #: Every request and goal that reached the node's reader is kept until a callback takes it.
 KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+#: robot_state_publisher's robot_description: the latest description, also to late joiners.
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: After handing over a call's answer, how long the worker may wait (for nothing but the answer
 #: to go out) before it publishes the trajectory and logs, unless new work arrives first.
 ANSWER_GRACE_S = 5e-3
@@ -121,6 +131,7 @@ class PlannerNode(Node):
         super().__init__('trajplan', **kwargs)
         for spec in PARAMETERS:
             self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+        self._topic_description = ''                  # the last usable robot_description
         self._settings = Settings.from_parameters(self._parameter_values())
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -143,17 +154,17 @@ class PlannerNode(Node):
         self._paths = self.create_publisher(Path, 'planned_path', 10)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_subscription(Point, 'goal', self._on_goal, KEEP_ALL)
+        self.create_subscription(PointStamped, 'clicked_point', self._on_clicked_point, KEEP_ALL)
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
                                  qos_profile_sensor_data)
+        self.create_subscription(String, 'robot_description', self._on_description, LATCHED)
         self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
                             callback_group=ReentrantCallbackGroup())
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
-        arm = self._settings.arm
-        self.get_logger().info(
-            f"ready: {arm.n_joints}-joint arm ({', '.join(arm.joint_names)}), "
-            f'{self._settings.algorithm}, {self._settings.omega} rad/s')
+        self.get_logger().info(f'ready: {jobs.describe_arm(self._settings)}, '
+                               f'{self._settings.algorithm}, {self._settings.omega} rad/s')
 
     # --- parameters -------------------------------------------------------------------------
 
@@ -164,15 +175,35 @@ class PlannerNode(Node):
         values = self._parameter_values()
         values.update({p.name: p.value for p in params})
         try:
-            Settings.from_parameters(values)
+            Settings.from_parameters(values, self._topic_description)
         except ValueError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
-        self._settings = Settings.from_parameters(self._parameter_values())
-        self.get_logger().info('parameters set for the next plan: ' +
-                               ', '.join(f'{p.name}={p.value}' for p in params))
+        before = self._settings
+        self._settings = Settings.from_parameters(self._parameter_values(),
+                                                  self._topic_description)
+        shown = ', '.join(f'{p.name}=<{len(p.value)} characters>' if p.name == 'robot_description'
+                          else f'{p.name}={p.value}' for p in params)
+        self.get_logger().info(f'parameters set for the next plan: {shown}')
+        if self._settings.arm is not before.arm:
+            self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(self._settings)}')
+
+    def _on_description(self, msg: String) -> None:
+        """Build the arm from a robot_description message, or log why it is refused."""
+        if self.get_parameter('robot_description').value:
+            self.get_logger().info('robot_description topic: ignored, the robot_description '
+                                   'parameter is set')
+            return
+        try:
+            settings = Settings.from_parameters(self._parameter_values(), msg.data)
+        except ValueError as exc:
+            self.get_logger().warning(f'robot_description refused: {exc}; keeping '
+                                      f'{jobs.describe_arm(self._settings)}')
+            return
+        self._topic_description, self._settings = msg.data, settings
+        self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(settings)}')
 
     # --- inputs (executor thread) -----------------------------------------------------------
 
@@ -188,6 +219,18 @@ class PlannerNode(Node):
             self.get_logger().info(
                 f'superseded {superseded.label} {jobs.describe_goal(superseded.goal)} m: '
                 f'{job.label} arrived while planning')
+
+    def _on_clicked_point(self, msg: PointStamped) -> None:
+        frame, base_frame = msg.header.frame_id, self._settings.base_frame
+        if frame and frame != base_frame:
+            self._counters.add('goals_received')
+            self._counters.add('goals_failed')
+            self.get_logger().warning(
+                f'clicked_point {jobs.describe_goal((msg.point.x, msg.point.y, msg.point.z))} m: '
+                f"refused: it is in frame '{frame}', but this node plans in base_frame "
+                f"'{base_frame}' (it does no frame transforms)")
+            return
+        self._on_goal(msg.point)
 
     def _on_joint_states(self, msg: JointState) -> None:
         self._states.update(msg.name, msg.position, self._settings.arm.joint_names)

@@ -7,10 +7,19 @@ The planner node's parameters: one table of names, defaults and ranges, and thei
 descriptor built from it, and ``config/params.yaml`` repeats its defaults (a test holds the two
 equal). ``Settings.from_parameters`` turns a full set of values into the settings of the next
 plan, or refuses them with a one-line reason. Nothing here imports rclpy.
+
+The arm comes from a URDF when there is one: the ``robot_description`` parameter when it is set,
+else the last description received on the ``robot_description`` topic. Then the chain from
+``base_link`` to ``tip_link`` is planned (every revolute joint on it, with the URDF's names and
+limits), the ``arm.*`` DH parameters are ignored, ``start_positions`` must list every chain
+joint (its untouched default, five zeros for the paper arm, means all zeros) and ``base_frame``,
+left at its default, becomes the chain's base link. Without a description the ``arm.*``
+parameters (the paper arm) apply.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 from typing import Any, Mapping
 
 import numpy as np
@@ -63,6 +72,16 @@ def _arm_specs() -> list[ParameterSpec]:
 
 #: Every parameter of the node, in declaration order.
 PARAMETERS: tuple[ParameterSpec, ...] = (
+    ParameterSpec('robot_description', '',
+                  'URDF of the arm (XML text); empty: the robot_description topic, else the '
+                  'arm.* DH parameters'),
+    ParameterSpec('base_link', '', 'first link of the planned chain; empty: the URDF root'),
+    ParameterSpec('tip_link', '',
+                  'last link of the planned chain; empty: where the only chain of revolute '
+                  'joints ends'),
+    ParameterSpec('tool_offset', [0.0, 0.0, 0.0], 'tool point in the tip link frame, m'),
+    ParameterSpec('tool_axis', [0.0, 0.0, 1.0],
+                  'tool axis in the tip link frame (radial mode uses it)'),
     *_arm_specs(),
     ParameterSpec('angular_velocity', DEFAULT_OMEGA, 'servo angular velocity omega, rad/s',
                   bounds=(1e-3, 10.0)),
@@ -121,23 +140,41 @@ class Settings:
     max_trajectory_points: int
     max_queued_calls: int
     diagnostic_period: float
+    #: The URDF the arm was built from ('' for the DH parameters).
+    description: str = ''
 
     @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> Settings:
-        """Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused."""
-        arm = ArmModel.from_dh(*(values[f'arm.{k}'] for k in ('a', 'alpha', 'd')),
-                               sign=values['arm.sign'], offset=values['arm.offset'],
-                               lower=values['arm.lower'], upper=values['arm.upper'],
-                               joint_names=list(values['arm.joint_names']),
-                               planned=values['arm.planned'])
+    def from_parameters(cls, values: Mapping[str, Any], topic_description: str = '') -> Settings:
+        """
+        Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused.
+
+        ``topic_description`` is the last URDF received on the robot_description topic.
+        """
+        description = values['robot_description'] or topic_description
+        if description:
+            arm = _urdf_arm(description, values['base_link'] or None,
+                            values['tip_link'] or None, tuple(values['tool_offset']),
+                            tuple(values['tool_axis']))
+        else:
+            arm = ArmModel.from_dh(*(values[f'arm.{k}'] for k in ('a', 'alpha', 'd')),
+                                   sign=values['arm.sign'], offset=values['arm.offset'],
+                                   lower=values['arm.lower'], upper=values['arm.upper'],
+                                   joint_names=list(values['arm.joint_names']),
+                                   planned=values['arm.planned'])
         for spec in PARAMETERS:
             if spec.choices and values[spec.name] not in spec.choices:
                 raise ValueError(f"{spec.name} must be one of {', '.join(spec.choices)}, "
                                  f'got {values[spec.name]!r}')
         if not values['base_frame']:
             raise ValueError('base_frame must not be empty')
+        start_positions, base_frame = values['start_positions'], values['base_frame']
+        defaults = default_values()
+        if description and list(start_positions) == defaults['start_positions']:
+            start_positions = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
+        if description and base_frame == defaults['base_frame']:
+            base_frame = arm.base_link
         try:
-            start = arm.full_start(values['start_positions'])
+            start = arm.full_start(start_positions)
         except ValueError as exc:
             raise ValueError(f'start_positions: {exc} for the {arm.n_joints}-joint arm '
                              '(change both at once)') from None
@@ -148,9 +185,17 @@ class Settings:
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
                    tolerance=values['tolerance'], axis_tolerance=values['axis_tolerance'],
-                   base_frame=values['base_frame'],
+                   base_frame=base_frame, description=description,
                    sample_period=values['sample_period'], start=start,
                    max_planning_time=values['max_planning_time'],
                    max_trajectory_points=values['max_trajectory_points'],
                    max_queued_calls=values['max_queued_calls'],
                    diagnostic_period=values['diagnostic_updater.period'])
+
+
+@functools.lru_cache(maxsize=4)
+def _urdf_arm(description: str, base_link: str | None, tip_link: str | None,
+              tool_offset: tuple[float, ...], tool_axis: tuple[float, ...]) -> ArmModel:
+    """Return the chain of a URDF, parsed once per text and settings (every check asks)."""
+    return ArmModel.from_urdf(description, base_link, tip_link, tool_offset=tool_offset,
+                              tool_axis=tool_axis)

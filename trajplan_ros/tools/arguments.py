@@ -42,8 +42,8 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """Add --urdf, --base-link, --tip-link, --tool-offset and --tool-axis (default: paper arm)."""
     group = parser.add_argument_group('arm (default: the paper arm, DH)')
     group.add_argument('--urdf', metavar='FILE',
-                       help="plan for the chain of this URDF: every revolute joint from the base "
-                            "link to the tip link (joint names and limits from the file)")
+                       help='plan for the chain of this URDF: every revolute joint from the base '
+                            'link to the tip link (joint names and limits from the file)')
     group.add_argument('--base-link', metavar='NAME', help='chain start (default: the URDF root)')
     group.add_argument('--tip-link', metavar='NAME',
                        help='chain end (default: where the only chain of revolute joints ends)')

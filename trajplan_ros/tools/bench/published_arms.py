@@ -18,7 +18,7 @@ __all__ = ['PUBLISHED', 'PublishedArm', 'robots_dir']
 
 @dataclass(frozen=True)
 class PublishedArm:
-    """One arm: its URDF below ``robots_dir()`` and the chain from ``base_link`` to ``tip_link``."""
+    """One arm: its URDF below ``robots_dir()``, the chain from ``base_link`` to ``tip_link``."""
 
     path: str
     base_link: str

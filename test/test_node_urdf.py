@@ -1,0 +1,136 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The planner node with a real arm's URDF, over real DDS.
+
+The SO-101's published URDF arrives on ``robot_description`` the way robot_state_publisher
+offers it (reliable, transient local); the node then plans its five joints by their URDF names.
+A bad description is refused and the arm in use is kept; goals also come from RViz's
+``clicked_point``.
+"""
+from __future__ import annotations
+
+from typing import Any, Iterator
+
+from conftest import NodeProcess
+from geometry_msgs.msg import PointStamped
+from nav_msgs.srv import GetPlan
+import numpy as np
+import pytest
+from rclpy.duration import Duration
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+from test_node import check_servo_trajectory, fmt, started_from, trajectory_to
+from test_urdf_import import BILLION_LAUGHS
+from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros import ArmModel
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.ros_client import plan_request, RosClient
+import yourdfpy
+
+
+NS = '/so101_ns'
+SO101 = PUBLISHED['so101']
+ARM = ArmModel.from_urdf(SO101.urdf, SO101.base_link, SO101.tip_link)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+@pytest.fixture(scope='module')
+def planner(start_node) -> Iterator[NodeProcess]:
+    node = start_node('-r', f'__ns:={NS}', '-p', f'base_link:={SO101.base_link}',
+                      '-p', f'tip_link:={SO101.tip_link}')
+    yield node
+    assert node.stop() == 0, node.output
+
+
+@pytest.fixture(scope='module')
+def describe(planner: NodeProcess, peer: RosClient):
+    """Give a function that publishes a robot_description as robot_state_publisher does."""
+    pub = peer.node.create_publisher(String, f'{NS}/robot_description', LATCHED)
+
+    def publish(text: str) -> None:
+        pub.publish(String(data=text))
+        assert pub.wait_for_all_acked(Duration(seconds=30))
+
+    return publish
+
+
+@pytest.fixture(scope='module')
+def trajectories(planner: NodeProcess, peer: RosClient):
+    return peer.inbox(JointTrajectory, f'{NS}/joint_trajectory')
+
+
+def _goal(seed: int) -> tuple[float, float, float]:
+    q = np.random.default_rng(seed).uniform(ARM.lower, ARM.upper)
+    return tuple(ARM.tool(q[None])[0][0].round(4).tolist())
+
+
+def _tip(q: np.ndarray) -> np.ndarray:
+    """Return the tip position by yourdfpy's FK (not ours)."""
+    other = yourdfpy.URDF.load(str(SO101.urdf), build_scene_graph=True, load_meshes=False,
+                               load_collision_meshes=False)
+    other.update_cfg(dict(zip(ARM.joint_names, q)))
+    return other.get_transform(frame_to=SO101.tip_link, frame_from=SO101.base_link)[:3, 3]
+
+
+def test_a_described_arm_plans_by_its_urdf_names(planner, describe, peer, trajectories) -> None:
+    mark = planner.mark()
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    planner.wait_for(r'arm for the next plan: 5-joint arm \(shoulder_pan, shoulder_lift, '
+                     r'elbow_flex, wrist_flex, wrist_roll\) from robot_description, chain '
+                     r'base_link -> gripper_frame_link', mark)
+    goal = _goal(1)
+    answer = peer.call(GetPlan, f'{NS}/plan_trajectory', plan_request(goal))
+    assert answer.plan.poses and answer.plan.header.frame_id == 'base_link'
+    _, start = started_from(planner, 'service call', goal, mark)
+    msg = trajectory_to(trajectories, goal, arm=ARM)
+    end = check_servo_trajectory(msg, start, names=ARM.joint_names)
+    assert np.linalg.norm(_tip(end) - goal) <= 1e-6
+
+
+def test_a_bad_description_is_refused_and_the_arm_kept(planner, describe, peer,
+                                                       trajectories) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    for text, reason in ((BILLION_LAUGHS, 'declares a DTD'),
+                         ('<robot name="r"><link name="a"/></robot>', 'unknown link .base_link.'),
+                         ('<robot name="r"><link', 'not well-formed XML')):
+        mark = planner.mark()
+        describe(text)
+        planner.wait_for(rf'robot_description refused: .*{reason}.*; keeping 5-joint arm '
+                         r'\(shoulder_pan', mark)
+    goal = _goal(2)
+    answer = peer.call(GetPlan, f'{NS}/plan_trajectory', plan_request(goal))
+    assert answer.plan.poses
+    assert tuple(trajectory_to(trajectories, goal, arm=ARM).joint_names) == ARM.joint_names
+
+
+def test_clicked_points_in_the_base_frame_are_goals(planner, describe, peer,
+                                                    trajectories) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    goal = _goal(3)
+    mark = planner.mark()
+    elsewhere = PointStamped()
+    elsewhere.header.frame_id = 'world'
+    elsewhere.point.x, elsewhere.point.y, elsewhere.point.z = goal
+    peer.publish(PointStamped, f'{NS}/clicked_point', elsewhere)
+    planner.wait_for(rf"clicked_point {fmt(goal)} m: refused: it is in frame 'world', but "
+                     r"this node plans in base_frame 'base_link'", mark)
+    clicked = PointStamped()
+    clicked.header.frame_id = 'base_link'
+    clicked.point = elsewhere.point
+    peer.publish(PointStamped, f'{NS}/clicked_point', clicked)
+    planner.wait_for(rf'goal #\d+ {fmt(goal)} m from q = .*: reached', mark)
+    trajectory_to(trajectories, goal, arm=ARM)
+
+
+def test_start_positions_must_match_the_chain(planner, describe, peer: RosClient) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    results: list[Any] = peer.set_parameters(
+        f'{NS}/trajplan', [Parameter('start_positions', value=[0.0, 0.1, 0.2])])
+    assert not results[0].successful
+    assert 'start_positions: a start needs 5 joint angles, got 3' in results[0].reason
+    results = peer.set_parameters(
+        f'{NS}/trajplan', [Parameter('start_positions', value=[0.0, 0.1, 0.2, 0.3, 0.4])])
+    assert results[0].successful
