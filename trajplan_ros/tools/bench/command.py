@@ -11,6 +11,9 @@ to stderr as a tqdm bar unless ``--quiet``.
 
 ``--paper`` runs the paper's experiment instead (its target from q = 0, its settings) and lays it
 out like Table 5 beside the printed values, with the with/without-reward comparison of Fig. 10.
+
+``--urdf`` benchmarks a URDF chain instead (``chain_bench``): no exact minimum there, so a
+multi-start SLSQP solve is the reference, and the rows are IEPSO, scipy DE, pyswarms and ikpy.
 """
 from __future__ import annotations
 
@@ -20,10 +23,13 @@ import importlib.util
 import sys
 from typing import Sequence
 
-from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning.objective import Mode
-from trajplan_ros.tools.arguments import positive_count, UsageError
+from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, positive_count,
+                                          UsageError)
 from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
+from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain, ikpy_method,
+                                                  IndependentFk, run_chain)
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
@@ -36,14 +42,16 @@ __all__ = ['add_parser']
 
 DEFAULT_GOALS = 100
 QUICK_GOALS = 8
+#: The rows of a URDF chain's bench unless --algorithms says otherwise.
+CHAIN_METHODS = ('iepso', 'scipy-de', 'pyswarms', 'ikpy')
 
 
 def _method_names(text: str) -> list[str]:
     names = [n.strip() for n in text.split(',') if n.strip()]
-    unknown = [n for n in names if n not in METHODS]
+    unknown = [n for n in names if n not in METHODS and n != 'ikpy']
     if unknown:
         raise argparse.ArgumentTypeError(
-            f"unknown method {unknown[0]!r}; choose from {', '.join(METHODS)}")
+            f"unknown method {unknown[0]!r}; choose from {', '.join(METHODS)}, ikpy (--urdf)")
     return names
 
 
@@ -85,13 +93,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--failures', type=int, default=10, metavar='N',
                    help='failed plans listed per method (default 10, -1 for all)')
     p.add_argument('--quiet', action='store_true', help='no progress on stderr')
+    p.add_argument('--reference-starts', type=positive_count, default=24, metavar='N',
+                   help='with --urdf: SLSQP starts of the reference per goal (default 24)')
+    add_arm_arguments(p)
     p.set_defaults(run=_run)
 
 
-def _chosen_methods(args: argparse.Namespace) -> tuple[list[Method], list[str]]:
+def _chosen_methods(args: argparse.Namespace, arm: ArmModel) -> tuple[list[Method], list[str]]:
     """Return the chosen methods that can run here, and a note for each that cannot."""
-    wanted = {n for group in args.algorithms for n in group} if args.algorithms else set(METHODS)
-    chosen = [METHODS[n] for n in METHODS if n in wanted]
+    default = CHAIN_METHODS if args.urdf else tuple(METHODS)
+    wanted = {n for group in args.algorithms for n in group} if args.algorithms else set(default)
+    table = dict(METHODS)
+    if args.urdf:
+        table['ikpy'] = ikpy_method(args.urdf, arm)
+    elif 'ikpy' in wanted:
+        raise UsageError('ikpy needs --urdf (it reads the chain from the file)')
+    chosen = [table[n] for n in table if n in wanted]
     notes = [f'{m.name}: {m.requires} is not installed, skipped '
              f"(pip install {m.requires}, or the package's 'bench' extra)"
              for m in chosen if not m.available]
@@ -157,9 +174,47 @@ def _report(args: argparse.Namespace, results: dict[str, Results], cases: Sequen
         write_plans_csv(args.plans_csv, results, cases)
 
 
+def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: list[Method],
+               notes: list[str]) -> int:
+    """Benchmark a URDF chain (``chain_bench``)."""
+    if args.paper or args.only != 'all' or args.sets != 1 or args.runs != 1:
+        raise UsageError('--urdf draws its own goals: --paper, --only, --sets and --runs do not '
+                         'apply')
+    n = args.goals or (QUICK_GOALS if args.quick else DEFAULT_GOALS)
+    starts = 'random in-limit starts' if args.random_starts else 'q = 0 (clipped into limits)'
+    print(f'trajplan bench --urdf: {n} goals, {arm.n_joints}-joint chain {arm.base_link} -> '
+          f'{arm.tip_link} ({", ".join(arm.joint_names)}), {mode.value} mode, {starts}, seed '
+          f'{args.seed}; reference: best of {args.reference_starts} SLSQP starts per goal.')
+    fk = IndependentFk(args.urdf, arm)
+    try:
+        cases, dropped = draw_chain_cases(arm, n, mode=mode, random_starts=args.random_starts,
+                                          seed=args.seed, starts=args.reference_starts)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if dropped:
+        print(f'{dropped} drawn goal(s) dropped: the reference found no '
+              f"{'radial ' if mode is Mode.RADIAL else ''}pose for them.")
+    print("success = error <= 1 um by yourdfpy's FK (radial: axis within 1e-6 rad of the goal "
+          'ray) and motion time at most 0.1 % above the reference; time = wall time per plan.\n')
+    if args.quiet or importlib.util.find_spec('tqdm') is None:
+        results = run_chain(methods, cases, arm, mode, fk)
+    else:
+        from tqdm import tqdm
+
+        with tqdm(total=len(cases), desc='bench', unit='goal', file=sys.stderr) as bar:
+            results = run_chain(methods, cases, arm, mode, fk, step=bar.update)
+    print(format_chain(results, cases))
+    for note in notes:
+        print(note)
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
-    arm, mode = paper_arm(), Mode(args.mode)
-    methods, notes = _chosen_methods(args)
+    arm, mode = arm_from_arguments(args), Mode(args.mode)
+    methods, notes = _chosen_methods(args, arm)
+    if args.urdf:
+        load(methods)
+        return _run_chain(args, arm, mode, methods, notes)
     load(methods)                  # import the peers now, not inside the first timed call
     cases = _cases(args, arm, mode)
     print(format_criteria() + '\n')

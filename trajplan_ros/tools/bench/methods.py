@@ -47,10 +47,15 @@ _UNCHANGED_LOGGING = 'version: 1\nincremental: true\n'
 
 @dataclass(frozen=True)
 class Answer:
-    """A method's joint goal for the planned joints (rad), with the plan when ``plan`` made it."""
+    """
+    A method's joint goal for the planned joints (rad), with the plan when ``plan`` made it.
+
+    ``joints``: every joint's angle, when the method gives them (ikpy).
+    """
 
     x: np.ndarray
     plan: PlanResult | None = None
+    joints: np.ndarray | None = None
 
 
 Solver = Callable[[ArmModel, Mode, np.ndarray, np.ndarray, int], Answer]
@@ -116,7 +121,8 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
                   shaping=shaping, options=options)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
-    return Answer(result.joint_goal[: arm.planned], result)
+    planned = arm.without_idle_tail(mode is Mode.RADIAL).planned      # as the objective plans
+    return Answer(result.joint_goal[:planned], result)
 
 
 def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,

@@ -23,7 +23,7 @@ from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCES
 
 __all__ = ['Summary', 'summarise', 'format_criteria', 'format_failures', 'format_goals_heading',
            'format_paper', 'format_paper_heading', 'format_sets', 'format_summary',
-           'write_plans_csv', 'write_summary_csv']
+           'format_table', 'write_plans_csv', 'write_summary_csv']
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ def summarise(results: dict[str, Results]) -> list[Summary]:
             for name, r in results.items()]
 
 
-def _table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+def format_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     """Lay out a plain text table: first column left-aligned, the others right-aligned."""
     widths = [max(len(c) for c in col) for col in zip(headers, *rows)]
     lines = []
@@ -122,7 +122,7 @@ def format_summary(rows: Sequence[Summary]) -> str:
     body = [(s.method, f'{100 * s.success_rate:.2f} %', f'{s.median_error_m:.1e}',
              f'{s.worst_error_m:.1e}', _percent(s.median_gap, 3), f'{1e3 * s.median_time_s:.1f}',
              f'{1e3 * s.p99_time_s:.1f}', _ratio(s.time_ratio_to_iepso)) for s in rows]
-    return _table(headers, body)
+    return format_table(headers, body)
 
 
 def format_failures(results: dict[str, Results], cases: Sequence[Case], limit: int) -> str:
@@ -192,17 +192,17 @@ def format_paper(results: dict[str, Results], case: Case, arm: ArmModel, mode: M
     parts = [
         'Table 5 as printed (Lv et al. 2019; error in mm; '
         f'R = max|q| / {DEFAULT_OMEGA:g} rad/s from the printed q):',
-        _table(headers, printed),
+        format_table(headers, printed),
         '',
         f'This run: the same target from q = 0, seed {case.seed} '
         '(F of the objective with reward, eq. 9):',
-        _table((*headers, 'gap', 'time (ms)'), _run_rows(results, case, arm, mode)),
+        format_table((*headers, 'gap', 'time (ms)'), _run_rows(results, case, arm, mode)),
     ]
     if reward_rows:
         parts += ['', 'With and without the reward (Fig. 10): '
                       'first generation with the error at or below',
-                  _table(('method', f'{eps * 1e6:g} um (eps)', '1 um', '1e-12 m', 'generations',
-                          'final error (m)', 'R (s)'), reward_rows)]
+                  format_table(('method', f'{eps * 1e6:g} um (eps)', '1 um', '1e-12 m',
+                                'generations', 'final error (m)', 'R (s)'), reward_rows)]
     return '\n'.join(parts)
 
 

@@ -1,0 +1,269 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The benchmark on a URDF chain (``trajplan bench --urdf``): goals, a reference, peers, scores.
+
+Goals are the tool positions of seeded random in-limit configurations (continuous joints within
+pi of 0); starts are q = 0 clipped into the limits, or random in-limit configurations. These
+arms have no exact minimum, so each goal gets a reference (``minimax_reference``): a multi-start
+local solve of min t subject to fk(q) = goal (and the tool axis on the goal ray in radial mode),
+|q_i - s_i| <= omega_i t and the limits, by scipy's SLSQP from ``starts`` random points. In
+radial mode a goal is kept only when the reference finds a radial pose. The reference lives in
+the bench only.
+
+Every method runs on the same goals, starts and seeds. The position error of every answer is
+measured by yourdfpy's forward kinematics of the URDF (not ours); a plan is reached when that
+error is at most 1 um (and the axis within 1e-6 rad of the goal ray in radial mode), and
+successful when it is reached with a motion time at most 0.1 % above the reference. The report
+also counts answers that beat the reference by more than 0.1 % (where the reference is weak).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import time
+from typing import Callable, Sequence
+import warnings
+
+import numpy as np
+
+from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.kinematics.urdf_import import read_urdf
+from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
+from trajplan_ros.tools.bench.methods import Answer, Method
+from trajplan_ros.tools.bench.report import format_table
+from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP
+
+__all__ = ['ChainCase', 'ChainResults', 'IndependentFk', 'draw_chain_cases', 'format_chain',
+           'ikpy_method', 'minimax_reference', 'run_chain']
+
+
+@dataclass(frozen=True)
+class ChainCase:
+    """One goal: where to go, from where, the plans' seed and the reference's time and pose."""
+
+    goal: np.ndarray
+    start: np.ndarray
+    seed: int
+    reference_time: float
+    reference_q: np.ndarray
+
+
+def _box(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
+    """Return the joint limits, with a continuous joint's taken as [-pi, pi]."""
+    return (np.where(np.isfinite(arm.lower), arm.lower, -np.pi),
+            np.where(np.isfinite(arm.upper), arm.upper, np.pi))
+
+
+def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
+                      ) -> tuple[float, np.ndarray | None]:
+    """
+    Return the least motion time SLSQP finds from ``starts`` random points, and its joint goal.
+
+    The problem is min t over (x, t) subject to c(x) = 0 (``Objective.residuals``), omega_i t
+    >= |x_i - s_i| and the search box; a solve counts when its error is below 1e-9 m (and, in
+    radial mode, its axis within 1e-9 rad of the goal ray). (inf, None) when none does.
+    """
+    from scipy.optimize import minimize
+
+    m, s, speeds = obj.lower.size, obj.start[: obj.lower.size], obj.speeds
+
+    def residuals(z: np.ndarray) -> np.ndarray:
+        return obj.residuals(*obj.tool(z[None, :m]))[0]
+
+    def jacobian(z: np.ndarray) -> np.ndarray:
+        d = obj.tool_jacobian(z[None, :m])
+        jac = obj.linear_residuals(d.jp[0].T, d.ju[0].T).T          # (rows, m)
+        return np.hstack((jac, np.zeros((jac.shape[0], 1))))
+
+    slow = np.hstack((-np.eye(m), speeds[:, None]))                 # omega t - (x - s) >= 0
+    fast = np.hstack((np.eye(m), speeds[:, None]))                  # omega t + (x - s) >= 0
+    constraints = [{'type': 'eq', 'fun': residuals, 'jac': jacobian},
+                   {'type': 'ineq', 'fun': lambda z: slow @ z + s, 'jac': lambda z: slow},
+                   {'type': 'ineq', 'fun': lambda z: fast @ z - s, 'jac': lambda z: fast}]
+    bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
+    best_time, best = np.inf, None
+    for x0 in rng.uniform(obj.lower, obj.upper, (starts, m)):
+        z0 = np.append(x0, obj.motion_time(x0[None])[0])
+        found = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1], method='SLSQP',
+                         bounds=bounds, constraints=constraints,
+                         options={'maxiter': 200, 'ftol': 1e-12})
+        x = np.clip(found.x[:m], obj.lower, obj.upper)
+        p, u = obj.tool(x[None])
+        ok = np.linalg.norm(p[0] - obj.goal) <= 1e-9
+        if obj.radial:
+            ok &= obj.axis_angle(u)[0] <= 1e-9
+        t = obj.motion_time(x[None])[0]
+        if ok and t < best_time:
+            best_time, best = t, x
+    return best_time, best
+
+
+def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
+                     starts: int = 24, progress: Callable[[], object] | None = None
+                     ) -> tuple[list[ChainCase], int]:
+    """
+    Draw ``n`` goals and their references (module docstring); also return how many were dropped.
+
+    A goal is dropped when the reference finds no pose for it (radial mode: no radial pose).
+    """
+    rng = np.random.default_rng(seed)
+    low, high = _box(arm)
+    cases: list[ChainCase] = []
+    dropped = 0
+    while len(cases) < n:
+        if dropped > 100 * n + 100:
+            raise ValueError(f'the reference found a pose for only {len(cases)} of '
+                             f'{len(cases) + dropped} goals in {mode.value} mode')
+        q = rng.uniform(low, high, (2, arm.n_joints))
+        goal = arm.tool(q[:1])[0][0]
+        start = q[1] if random_starts else np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
+        plan_seed = int(rng.integers(2 ** 31))
+        try:
+            obj = Objective(arm, goal, start, mode=mode)
+        except InvalidRequest:
+            dropped += 1
+            continue
+        best_time, best = minimax_reference(obj, rng, starts)
+        if best is None:
+            dropped += 1
+            continue
+        cases.append(ChainCase(goal, start, plan_seed, best_time, obj.full(best)[0]))
+        if progress is not None:
+            progress()
+    return cases, dropped
+
+
+class IndependentFk:
+    """The tool point and axis by yourdfpy's forward kinematics of the same URDF (not ours)."""
+
+    def __init__(self, urdf: str, arm: ArmModel) -> None:
+        import yourdfpy
+
+        read_urdf(urdf)                      # the same checks before yourdfpy reads the file
+        self._model = yourdfpy.URDF.load(urdf, build_scene_graph=True, load_meshes=False,
+                                         load_collision_meshes=False)
+        self._arm = arm
+
+    def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the tool point and axis (3,) in the base frame for joint angles q."""
+        self._model.update_cfg(dict(zip(self._arm.joint_names, q)))
+        tip = self._model.get_transform(frame_to=self._arm.tip_link,
+                                        frame_from=self._arm.base_link)
+        return (tip[:3, :3] @ self._arm.tool_point + tip[:3, 3],
+                tip[:3, :3] @ self._arm.tool_axis)
+
+
+@dataclass
+class ChainResults:
+    """One method's outcome on every case (arrays indexed by case)."""
+
+    q: np.ndarray              # (n, n_joints) joint goals, rad
+    error: np.ndarray          # position error by ``IndependentFk``, m
+    axis_error: np.ndarray     # angle of the tool axis to the goal ray, rad (radial; else 0)
+    gap: np.ndarray            # R / reference - 1
+    seconds: np.ndarray        # wall time per plan, s
+
+    @property
+    def reached(self) -> np.ndarray:
+        """Tell for each case whether the answer meets the goal (and the ray, in radial mode)."""
+        return (self.error <= SUCCESS_ERROR) & (self.axis_error <= SUCCESS_AXIS_ERROR)
+
+    @property
+    def success(self) -> np.ndarray:
+        """Tell for each case whether the answer is reached within 0.1 % of the reference."""
+        return self.reached & (self.gap <= SUCCESS_GAP)
+
+
+def ikpy_method(urdf: str, arm: ArmModel) -> Method:
+    """
+    Return ikpy's inverse kinematics as a bench row for the chain of ``arm`` in ``urdf``.
+
+    ikpy only reaches a pose (from the start as its initial guess); it does not minimise time.
+    In radial mode it is asked for the tool z axis along the goal ray.
+    """
+    robot = read_urdf(urdf)
+    parents = {joint.child: joint for joint in robot.joints}
+    path, link = [arm.tip_link], arm.tip_link
+    while link != arm.base_link:
+        path[:0] = [parents[link].parent, parents[link].name]
+        link = parents[link].parent
+    state: dict[str, object] = {}
+
+    def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
+              seed: int) -> Answer:
+        if 'chain' not in state:
+            import ikpy.chain
+
+            with warnings.catch_warnings():      # ikpy warns of every fixed joint it reads
+                warnings.simplefilter('ignore', UserWarning)
+                chain = ikpy.chain.Chain.from_urdf_file(urdf, base_elements=path,
+                                                        symbolic=False)
+                chain.active_links_mask = np.array([k.joint_type in ('revolute', 'continuous')
+                                                    for k in chain.links])
+            state['chain'] = chain
+        chain = state['chain']
+        initial = np.zeros(len(chain.links))
+        initial[chain.active_links_mask] = start
+        radial = {'target_orientation': goal / np.linalg.norm(goal),
+                  'orientation_mode': 'Z'} if mode is Mode.RADIAL else {}
+        found = np.asarray(chain.inverse_kinematics(goal, initial_position=initial, **radial))
+        return Answer(found[chain.active_links_mask][: arm.planned],
+                      joints=found[chain.active_links_mask])
+
+    return Method('ikpy', 'ikpy inverse kinematics from the start (reaches; no time '
+                  'minimisation)', solve, 'ikpy', 'ikpy.chain')
+
+
+def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase) -> np.ndarray:
+    """Return the method's answer as every joint's angle."""
+    answer = method.solve(arm, mode, case.goal, case.start, case.seed)
+    if answer.joints is not None:
+        return answer.joints
+    if answer.plan is not None:
+        return answer.plan.joint_goal
+    return Objective(arm, case.goal, case.start, mode=mode).full(answer.x)[0]
+
+
+def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmModel,
+              mode: Mode, fk: IndependentFk, step: Callable[[], object] | None = None
+              ) -> dict[str, ChainResults]:
+    """Run every method on every case, taking turns goal by goal; score by ``fk``."""
+    n = len(cases)
+    out = {m.name: ChainResults(np.full((n, arm.n_joints), np.nan),
+                                *(np.full(n, np.nan) for _ in range(4))) for m in methods}
+    for k, case in enumerate(cases):
+        obj = Objective(arm, case.goal, case.start, mode=mode)
+        for method in methods:
+            clock = time.perf_counter()
+            q = _full(arm, method, mode, case)
+            res = out[method.name]
+            res.seconds[k] = time.perf_counter() - clock
+            res.q[k] = q
+            p, u = fk.tool(q)
+            res.error[k] = np.linalg.norm(p - case.goal)
+            res.axis_error[k] = obj.axis_angle(u[None])[0] if obj.radial else 0.0
+            moved = np.abs(q - case.start)[: obj.arm.planned] * obj.time_scale
+            res.gap[k] = np.max(moved) / obj.omega / case.reference_time - 1.0
+        if step is not None:
+            step()
+    return out
+
+
+def format_chain(results: dict[str, ChainResults], cases: Sequence[ChainCase]) -> str:
+    """Return the table: reached, success, both ways of beating by 0.1 %, time per plan."""
+    lead = float(np.median(results['iepso'].seconds)) if 'iepso' in results else np.nan
+    head = ('method', 'reached', 'success', 'beats ref', 'ref beats', 'worst error (m)',
+            'median time', 'p99 time', 'x iepso')
+    rows = []
+    for name, r in results.items():
+        reached = r.reached
+        rows.append((name, f'{100 * reached.mean():.2f} %', f'{100 * r.success.mean():.2f} %',
+                     str(int(np.sum(reached & (r.gap < -SUCCESS_GAP)))),
+                     str(int(np.sum(reached & (r.gap > SUCCESS_GAP)))),
+                     f'{np.max(r.error):.2g}', f'{1e3 * np.median(r.seconds):.1f} ms',
+                     f'{1e3 * np.percentile(r.seconds, 99):.1f} ms',
+                     f'{np.median(r.seconds) / lead:.1f}x' if np.isfinite(lead) else '-'))
+    times = np.array([c.reference_time for c in cases])
+    return format_table(head, rows) + (
+        f'\nreference motion time: median {np.median(times):.4f} s; "beats ref" / "ref beats": '
+        f'reached answers more than {100 * SUCCESS_GAP:g} % faster / slower than the reference')
