@@ -84,7 +84,7 @@ from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
 from trajplan_ros.planning.polish import polish as polish_candidates, settle
-from trajplan_ros.planning.solution_curve import curve_seeds
+from trajplan_ros.planning.solution_curve import curve_constraint, curve_seeds, project
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
@@ -96,6 +96,12 @@ __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 FREE_DEFAULTS = {'swarms': 8, 'polish_count': 2, 'polish_steps': 6}
 RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
+
+#: Where the solutions form a set of two or more dimensions: how many of the fastest polished
+#: probes the curve search polishes further, and for how many steps (``_multistart``).
+FINISHED = 4
+FINISH_STEPS = 30
+PROJECT_STEPS = 8
 
 #: Error (m) below which a refined candidate counts towards agreement. Reaching eps is not
 #: enough: eq. (17) rewards the last 5e-10 m with 12 s of F, so a fast candidate still settling
@@ -313,10 +319,13 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     reached = bool(here.error[0] <= ON_GOAL)
     points = np.concatenate((best[None, :],
                              initial_population(rng, obj.lower, obj.upper, (probes,))))
-    seeds = curve_seeds(obj, points, best if reached else None)
-    if not len(seeds):
-        return
-    polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps), ON_GOAL)
+    if curve_constraint(obj) is None and obj.arm.planned > (5 if obj.radial else 3):
+        polished = _multistart(obj, points, 2 * steps)
+    else:
+        seeds = curve_seeds(obj, points, best if reached else None)
+        if not len(seeds):
+            return
+        polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps), ON_GOAL)
     found = np.concatenate((best[None, :], polished))
     ev = obj(polished)
     efficiency = np.concatenate((here.efficiency, ev.efficiency))
@@ -325,6 +334,22 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     i = int(np.argmin(efficiency)) if i is None else i
     if i > 0 and (reached or efficiency[i] < efficiency[0]):
         swarm.replace_gbest(s, found[i], efficiency[i], error[i])
+
+
+def _multistart(obj: Objective, points: np.ndarray, steps: int) -> np.ndarray:
+    """
+    Return ``points`` polished, and the fastest few polished further (ours).
+
+    Where the solutions form a set of two or more dimensions (more planned joints than the
+    constraints and one), there is no curve to follow: every point is polished ``steps``
+    steps, then the ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more (the polish
+    converges more slowly on such sets).
+    """
+    first = polish_candidates(obj, project(obj, points, PROJECT_STEPS), max_steps=steps)
+    ev = obj(first)
+    order = np.lexsort((ev.motion_time, ev.error > ON_GOAL))[:FINISHED]
+    finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS)
+    return settle(obj, np.concatenate((first, finished)), ON_GOAL)
 
 
 def _restart(swarm: _Swarms, obj: Objective, rng: np.random.Generator, tol: float) -> int:

@@ -94,10 +94,15 @@ class Objective:
         #: angle, as moving them could only add time.
         self.arm = arm = arm.without_idle_tail(self.radial)
         m = arm.planned
-        #: The search box: the joint limits, and within pi of the start for a continuous joint
-        #: (an angle and that angle plus 2 pi are the same pose; the nearer one is the goal).
-        self.lower = np.where(np.isfinite(arm.lower[:m]), arm.lower[:m], self.start[:m] - np.pi)
-        self.upper = np.where(np.isfinite(arm.upper[:m]), arm.upper[:m], self.start[:m] + np.pi)
+        #: The search box: the joint limits and, for a joint whose range spans more than a turn
+        #: (a continuous joint, or limits of +-2 pi), one turn [w, w + 2 pi] with
+        #: w = clip(start - pi, lower, upper - 2 pi): q and q +- 2 pi are the same pose, and that
+        #: turn holds, of every pose, the angle within the limits nearest the start.
+        lower, upper = arm.lower[:m], arm.upper[:m]
+        turn = upper - lower > 2.0 * np.pi
+        window = np.clip(self.start[:m] - np.pi, lower, upper - 2.0 * np.pi)
+        self.lower = np.where(turn, window, lower)
+        self.upper = np.where(turn, window + 2.0 * np.pi, upper)
         #: Each planned joint's angular velocity omega_i (rad/s), and omega / omega_i.
         self.speeds = arm.speeds(self.omega)[:m]
         self.time_scale = self.omega / self.speeds

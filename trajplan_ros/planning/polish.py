@@ -31,6 +31,7 @@ through its answer, or on another curve; ``solution_curve`` follows them and see
 from __future__ import annotations
 
 import functools
+import itertools
 from typing import Callable
 
 import numpy as np
@@ -48,6 +49,38 @@ _TRAVEL_WEIGHT = 1e-6
 @functools.lru_cache(maxsize=8)
 def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
     return np.triu_indices(m, 1)
+
+
+@functools.lru_cache(maxsize=8)
+def _subsets(m: int, size: int) -> np.ndarray:
+    return np.array(list(itertools.combinations(range(m), size)))
+
+
+def _vertex_minimax(b: np.ndarray, basis: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """
+    Return z (K, k) that minimises max_i |b_i + (z @ basis)_i| over ||z|| <= limit.
+
+    b: (K, m); basis: (K, k, m). The function is convex and piecewise
+    linear, so its least value lies where k + 1 of the joints tie: every such set of joints
+    (each with the sign it has at z = 0) gives a vertex by one small linear solve, and the best
+    vertex (or z = 0) is taken, then shortened to the trust radius (which, by convexity, keeps
+    it no worse than z = 0).
+    """
+    k_count, k, m = basis.shape
+    sets = _subsets(m, k + 1)                                            # (C, k + 1)
+    sign = np.where(b >= 0.0, 1.0, -1.0)
+    rows = np.concatenate((np.swapaxes(basis, 1, 2) * sign[:, :, None],
+                           -np.ones((k_count, m, 1))), axis=2)           # (K, m, k + 1)
+    system, rhs = rows[:, sets], (-sign * b)[:, sets]                    # (K, C, k+1, k+1)
+    usable = np.abs(np.linalg.det(system)) > 1e-12
+    system = np.where(usable[..., None, None], system, np.eye(k + 1))
+    z = np.linalg.solve(system, rhs[..., None])[..., :k, 0]             # (K, C, k)
+    z = np.concatenate((np.zeros((k_count, 1, k)), z[:, :]), axis=1)
+    usable = np.concatenate((np.ones((k_count, 1), dtype=bool), usable), axis=1)
+    worst = np.max(np.abs(b[:, None, :] + z @ basis), axis=2)            # (K, C + 1)
+    best = z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
+    size = np.sqrt(np.einsum('kj,kj->k', best, best))
+    return best * np.minimum(1.0, limit / np.maximum(size, 1e-300))[:, None]
 
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -171,6 +204,22 @@ class Linearisation:
             mine[mask] = theirs[mask]
 
 
+def _null_step(null: np.ndarray, base: np.ndarray, start: np.ndarray, scale: np.ndarray,
+               lo: np.ndarray, hi: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """
+    Return the step along the null space that lowers R most in the linear model, (K, m).
+
+    ``base``: the candidates after the Newton step; ``scale``: omega / omega_i. The step is
+    cut short where it would leave the joint limits (it stays within ``delta``).
+    """
+    z = _vertex_minimax((base - start) * scale, null * scale, delta)
+    step = np.einsum('kj,kjm->km', z, null)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        room = np.where(step > 0, (hi - base) / step,
+                        np.where(step < 0, (lo - base) / step, np.inf))
+    return step * np.clip(np.min(room, axis=1), 0.0, 1.0)[:, None]
+
+
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
            enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None
            ) -> np.ndarray:
@@ -196,6 +245,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         size = np.sqrt(np.einsum('km,km->k', step, step))
         step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
         base = x + step
+        if here.null.shape[1] > 1:          # a set of solutions of 2 or more dimensions
+            base = base + _null_step(here.null, base, start, scale, lo, hi, delta)
         for j in range(here.null.shape[1]):
             direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
             with np.errstate(divide='ignore', invalid='ignore'):       # the joint limits along z

@@ -58,16 +58,23 @@ def _wrap(q: np.ndarray) -> np.ndarray:
     return np.mod(q + np.pi, 2 * np.pi) - np.pi
 
 
+def _wrap_into(curve: Objective, q: np.ndarray) -> np.ndarray:
+    """Wrap angles to [-pi, pi), or to the search box on joints whose box is a whole turn."""
+    turn = curve.upper - curve.lower >= 2.0 * np.pi - 1e-12
+    centre = np.where(turn, 0.5 * (curve.lower + curve.upper), 0.0)
+    return centre + _wrap(q - centre)
+
+
 def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     """
     Return x (K, planned) moved towards the solutions of ``curve`` by minimum-norm Newton steps.
 
-    The limits are ignored and angles wrapped to [-pi, pi). Rows that have not converged yet
+    The limits are ignored and angles wrapped (``_wrap_into``). Rows that have not converged yet
     carry on converging in ``follow``, which corrects every step.
     """
     for _ in range(steps):
         here = Linearisation(curve, x, 1.0, curvature=False)
-        x = _wrap(x + here.newton(here.c))
+        x = _wrap_into(curve, x + here.newton(here.c))
     return x
 
 
@@ -79,7 +86,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
     Returns (K, 2 steps + 1, planned): each curve in order, with its row of x in the middle.
     ``steps`` predictor-corrector steps of ``step`` rad (one for all rows, or one per row) each
     way (a step along the tangent and the curvature of the solutions, then one Newton
-    correction), straight through the joint limits (angles wrapped to [-pi, pi)).
+    correction), straight through the joint limits (angles wrapped, ``_wrap_into``).
     """
     k = x.shape[0]
     ends = np.concatenate((x, x))
@@ -93,7 +100,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
         ends = ends + here.newton(here.c)
         turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
         direction = here.null[:, 0, :] * turn[:, None]
-        path.append(_wrap(ends))
+        path.append(_wrap_into(curve, ends))
     walk = np.stack(path, axis=1)                                    # (2K, steps, planned)
     return np.concatenate((walk[k:, ::-1], x[:, None, :], walk[:k]), axis=1)
 

@@ -34,7 +34,7 @@ from trajplan_ros.tools.bench.report import format_table
 from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP
 
 __all__ = ['ChainCase', 'ChainResults', 'IndependentFk', 'draw_chain_cases', 'format_chain',
-           'ikpy_method', 'minimax_reference', 'run_chain']
+           'ikpy_method', 'local_minimax', 'minimax_reference', 'run_chain']
 
 
 @dataclass(frozen=True)
@@ -61,8 +61,20 @@ def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
 
     The problem is min t over (x, t) subject to c(x) = 0 (``Objective.residuals``), omega_i t
     >= |x_i - s_i| and the search box; a solve counts when its error is below 1e-9 m (and, in
-    radial mode, its axis within 1e-9 rad of the goal ray). (inf, None) when none does.
+    radial mode, its axis within 1e-9 rad of the goal ray). The search box is the objective's
+    (one turn for a joint with a wider range). (inf, None) when no solve counts.
     """
+    best_time, best = np.inf, None
+    for x0 in rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)):
+        x = local_minimax(obj, x0)
+        t = np.inf if x is None else obj.motion_time(x[None])[0]
+        if t < best_time:
+            best_time, best = t, x
+    return best_time, best
+
+
+def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
+    """Return SLSQP's solution of the reference problem from x0, or None when it fails."""
     from scipy.optimize import minimize
 
     m, s, speeds = obj.lower.size, obj.start[: obj.lower.size], obj.speeds
@@ -81,21 +93,16 @@ def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
                    {'type': 'ineq', 'fun': lambda z: slow @ z + s, 'jac': lambda z: slow},
                    {'type': 'ineq', 'fun': lambda z: fast @ z - s, 'jac': lambda z: fast}]
     bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
-    best_time, best = np.inf, None
-    for x0 in rng.uniform(obj.lower, obj.upper, (starts, m)):
-        z0 = np.append(x0, obj.motion_time(x0[None])[0])
-        found = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1], method='SLSQP',
-                         bounds=bounds, constraints=constraints,
-                         options={'maxiter': 200, 'ftol': 1e-12})
-        x = np.clip(found.x[:m], obj.lower, obj.upper)
-        p, u = obj.tool(x[None])
-        ok = np.linalg.norm(p[0] - obj.goal) <= 1e-9
-        if obj.radial:
-            ok &= obj.axis_angle(u)[0] <= 1e-9
-        t = obj.motion_time(x[None])[0]
-        if ok and t < best_time:
-            best_time, best = t, x
-    return best_time, best
+    z0 = np.append(x0, obj.motion_time(x0[None])[0])
+    found = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1], method='SLSQP',
+                     bounds=bounds, constraints=constraints,
+                     options={'maxiter': 200, 'ftol': 1e-12})
+    x = np.clip(found.x[:m], obj.lower, obj.upper)
+    p, u = obj.tool(x[None])
+    ok = np.linalg.norm(p[0] - obj.goal) <= 1e-9
+    if obj.radial:
+        ok &= obj.axis_angle(u)[0] <= 1e-9
+    return x if ok else None
 
 
 def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
