@@ -52,33 +52,51 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=8)
-def _subsets(m: int, size: int) -> np.ndarray:
-    return np.array(list(itertools.combinations(range(m), size)))
-
-
-def _vertex_minimax(b: np.ndarray, basis: np.ndarray, limit: np.ndarray) -> np.ndarray:
+def _vertex_sets(m: int, k: int) -> np.ndarray:
     """
-    Return z (K, k) that minimises max_i |b_i + (z @ basis)_i| over ||z|| <= limit.
+    Return the sets of k + 1 pieces that can meet at a vertex of ``_vertex_minimax``.
 
-    b: (K, m); basis: (K, k, m). The function is convex and piecewise
-    linear, so its least value lies where k + 1 of the joints tie: every such set of joints
-    (each with the sign it has at z = 0) gives a vertex by one small linear solve, and the best
-    vertex (or z = 0) is taken, then shortened to the trust radius (which, by convexity, keeps
-    it no worse than z = 0).
+    Pieces 0..m-1 are the joints' displacements tying with the largest, piece m the limit
+    nearest to the candidate: sets of k + 1 ties, and sets of that limit and k ties.
     """
-    k_count, k, m = basis.shape
-    sets = _subsets(m, k + 1)                                            # (C, k + 1)
-    sign = np.where(b >= 0.0, 1.0, -1.0)
-    rows = np.concatenate((np.swapaxes(basis, 1, 2) * sign[:, :, None],
-                           -np.ones((k_count, m, 1))), axis=2)           # (K, m, k + 1)
-    system, rhs = rows[:, sets], (-sign * b)[:, sets]                    # (K, C, k+1, k+1)
-    usable = np.abs(np.linalg.det(system)) > 1e-12
-    system = np.where(usable[..., None, None], system, np.eye(k + 1))
-    z = np.linalg.solve(system, rhs[..., None])[..., :k, 0]             # (K, C, k)
-    z = np.concatenate((np.zeros((k_count, 1, k)), z[:, :]), axis=1)
-    usable = np.concatenate((np.ones((k_count, 1), dtype=bool), usable), axis=1)
-    worst = np.max(np.abs(b[:, None, :] + z @ basis), axis=2)            # (K, C + 1)
-    best = z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
+    ties = list(itertools.combinations(range(m), k + 1))
+    bounded = [(m, *s) for s in itertools.combinations(range(m), k)]
+    return np.array(ties + bounded)
+
+
+def _vertex_minimax(b: np.ndarray, null: np.ndarray, scale: np.ndarray, gap_lo: np.ndarray,
+                    gap_hi: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """
+    Return z (K, k) that minimises max_i scale_i |b_i + (z @ null)_i| within the limits.
+
+    b: (K, m) displacements; null: (K, k, m) orthonormal rows; the step z @ null must stay
+    within [gap_lo, gap_hi] (the joint limits) and ||z|| within ``limit``. The function is
+    convex and piecewise linear, so its least value lies at a vertex where k + 1 pieces meet:
+    joints tying with the largest displacement (each with the sign it has at z = 0), or the
+    joint nearest to a limit on it and k tying. Every such set gives a vertex by one small
+    linear solve (a tiny ridge keeps degenerate sets solvable; their vertices are judged like
+    the others); the best one inside the limits (or z = 0) is taken, then shortened to the
+    trust radius (which, by convexity, keeps it no worse than z = 0 and inside the limits).
+    """
+    k_count, k, m = null.shape
+    sets = _vertex_sets(m, k)                                            # (C, k + 1)
+    sign = np.where(b >= 0.0, 1.0, -1.0) * scale
+    columns = np.swapaxes(null, 1, 2)                                    # (K, m, k)
+    ties = np.concatenate((columns * sign[:, :, None], -np.ones((k_count, m, 1))), axis=2)
+    rows_k = np.arange(k_count)
+    wall = np.argmin(np.minimum(gap_hi, -gap_lo), axis=1)                # the nearest limit
+    bound = np.where(gap_hi < -gap_lo, gap_hi, gap_lo)[rows_k, wall]
+    walls = np.concatenate((columns[rows_k, wall], np.zeros((k_count, 1))), axis=1)
+    rows = np.concatenate((ties, walls[:, None, :]), axis=1)             # (K, m + 1, k + 1)
+    rhs = np.concatenate((-sign * b, bound[:, None]), axis=1)            # (K, m + 1)
+    system, rhs = rows[:, sets], rhs[:, sets]                            # (K, C, k+1, k+1)
+    z = np.linalg.solve(system + 1e-13 * np.eye(k + 1), rhs[..., None])[..., :k, 0]
+    z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)          # (K, C + 1, k)
+    step = z @ null                                                      # (K, C + 1, m)
+    usable = np.all((step >= gap_lo[:, None, :] - 1e-12)
+                    & (step <= gap_hi[:, None, :] + 1e-12), axis=2)
+    worst = np.max(np.abs(b[:, None, :] + step) * scale, axis=2)         # (K, C + 1)
+    best = z[rows_k, np.argmin(np.where(usable, worst, np.inf), axis=1)]
     size = np.sqrt(np.einsum('kj,kj->k', best, best))
     return best * np.minimum(1.0, limit / np.maximum(size, 1e-300))[:, None]
 
@@ -212,7 +230,7 @@ def _null_step(null: np.ndarray, base: np.ndarray, start: np.ndarray, scale: np.
     ``base``: the candidates after the Newton step; ``scale``: omega / omega_i. The step is
     cut short where it would leave the joint limits (it stays within ``delta``).
     """
-    z = _vertex_minimax((base - start) * scale, null * scale, delta)
+    z = _vertex_minimax(base - start, null, scale, lo - base, hi - base, delta)
     step = np.einsum('kj,kjm->km', z, null)
     with np.errstate(divide='ignore', invalid='ignore'):
         room = np.where(step > 0, (hi - base) / step,
