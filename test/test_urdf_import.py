@@ -195,3 +195,28 @@ def test_a_wrist_roll_plans_only_when_it_can_move_the_tool() -> None:
                                   'tool_link', tool_axis=(1.0, 0.0, 0.0))
     assert sideways.without_idle_tail(axis=False).planned == 4
     assert sideways.without_idle_tail(axis=True) is sideways
+
+
+def test_vendor_extras_parse_without_reading_meshes() -> None:
+    so101 = PUBLISHED['so101']
+    text = so101.urdf.read_text(encoding='utf-8')
+    # the old transmission syntax (type as an attribute), the new one, gazebo tags; the
+    # published files already hold package:// meshes that do not exist here
+    extras = (
+        '<transmission name="old" type="pr2_mechanism_model/SimpleTransmission">'
+        '<joint name="shoulder_pan"/><actuator name="m1"/>'
+        '<mechanicalReduction>1</mechanicalReduction></transmission>'
+        '<transmission name="new"><type>transmission_interface/SimpleTransmission</type>'
+        '<joint name="elbow_flex"><hardwareInterface>hardware_interface/PositionJointInterface'
+        '</hardwareInterface></joint><actuator name="m2"><mechanicalReduction>1'
+        '</mechanicalReduction></actuator></transmission>'
+        '<gazebo reference="base_link"><material>Gazebo/Grey</material></gazebo>'
+        '<link name="world"/><joint name="world_joint" type="fixed"><parent link="world"/>'
+        '<child link="base_link"/></joint>')
+    assert 'package://' in text
+    arm = ArmModel.from_urdf(text.replace('</robot>', extras + '</robot>'),
+                             tip_link=so101.tip_link)
+    assert arm.base_link == 'world' and arm.n_joints == 5
+    plain = published('so101')
+    q = _samples(arm, np.random.default_rng(0), 5)
+    assert np.allclose(arm.tool(q)[0], plain.tool(q)[0], atol=1e-12)

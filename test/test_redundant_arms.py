@@ -1,0 +1,76 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""Planning where the solutions form sets of two or more dimensions (6- and 7-joint arms)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning import plan
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.polish import _vertex_minimax
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
+
+
+def published(name: str) -> ArmModel:
+    arm = PUBLISHED[name]
+    return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link)
+
+
+@pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
+def test_the_vertex_step_is_the_linear_minimax(k: int, m: int) -> None:
+    rng = np.random.default_rng(k)
+    compared = 0
+    for _ in range(60):
+        null = np.linalg.qr(rng.normal(size=(m, k)))[0].T[None]          # (1, k, m)
+        b = rng.choice([-1.0, 1.0], (1, m)) * rng.uniform(1.0, 3.0, (1, m))
+        scale = rng.uniform(1.0, 2.0, m)
+        z = _vertex_minimax(b, null, scale, np.full((1, m), -10.0), np.full((1, m), 10.0),
+                            np.array([100.0]))
+        ours = np.max(np.abs(b[0] + z[0] @ null[0]) * scale)
+        assert ours <= np.max(np.abs(b[0]) * scale) + 1e-12             # never worse
+        # the same problem as a linear programme: min t, -t <= scale (b + N^T z) <= t
+        a = null[0].T * scale[:, None]
+        rows = np.block([[a, -np.ones((m, 1))], [-a, -np.ones((m, 1))]])
+        rhs = np.concatenate((-scale * b[0], scale * b[0]))
+        best = linprog(np.eye(k + 1)[-1], A_ub=rows, b_ub=rhs, bounds=[(None, None)] * (k + 1))
+        moved = b[0] + best.x[:k] @ null[0]
+        if np.all(np.sign(moved) == np.sign(b[0])):      # the step keeps every joint's sign
+            compared += 1
+            assert ours == pytest.approx(best.fun, rel=1e-9, abs=1e-12)
+    assert compared >= 10
+
+
+def test_joints_beyond_a_turn_search_the_turn_nearest_the_start() -> None:
+    arm = published('ur5')
+    start = np.zeros(6)
+    start[0] = 6.0
+    obj = Objective(arm, arm.tool(np.full((1, 6), 0.3))[0][0], start)
+    assert obj.upper[0] - obj.lower[0] == pytest.approx(2 * np.pi)
+    assert obj.lower[0] <= 6.0 <= obj.upper[0] == pytest.approx(2 * np.pi)
+    # a goal reached at q1 = -0.3 is reached at q1 = 2 pi - 0.3 too, 0.583 rad from the start
+    q = np.array([-0.3, -1.0, 1.2, -0.5, 0.8, 0.0])
+    result = plan(arm.tool(q[None])[0][0], start, arm=arm, seed=0)
+    assert result.success
+    assert abs(result.joint_goal[0] - 6.0) <= np.pi
+
+
+@pytest.mark.parametrize('name', ['ur5', 'panda', 'xarm7'])
+def test_plans_reach_and_beat_the_pose_the_goal_came_from(name: str) -> None:
+    arm = published(name)
+    rng = np.random.default_rng(11)
+    low = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    high = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    for k in range(3):
+        source, start = rng.uniform(low, high, (2, arm.n_joints))
+        goal = arm.tool(source[None])[0][0]
+        result = plan(goal, start, arm=arm, seed=k)
+        assert result.success and result.position_error_m <= 1e-9
+        obj = Objective(arm, goal, start)
+        m = obj.arm.planned
+        # the source pose reaches the goal too (turned into the search box): never slower
+        turned = obj.lower + np.mod(source[:m] - obj.lower, 2 * np.pi)
+        pose = np.where(obj.upper - obj.lower >= 2 * np.pi - 1e-9, turned, source[:m])
+        assert result.motion_time_s <= obj.motion_time(pose[None])[0]
