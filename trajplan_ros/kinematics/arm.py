@@ -200,6 +200,7 @@ class ArmModel:
     tip_link: str
     _kinds: tuple[int, ...] = field(init=False, repr=False, compare=False)
     _tail: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
 
     def __init__(self, rotations: Sequence, translations: Sequence, *,
                  base: np.ndarray | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
@@ -255,6 +256,7 @@ class ArmModel:
         put(self, '_kinds', tuple(_kind(r) for r in self.rotations))
         tool = np.stack((self.tool_point, self.tool_axis))
         put(self, '_tail', (tool[:, 0] + 1j * tool[:, 1], tool[:, 2].copy()))
+        put(self, '_moving', {})                 # without_idle_tail's answers, built once
 
     @classmethod
     def from_dh(cls, a: Sequence[float], alpha: Sequence[float], d: Sequence[float], *,
@@ -339,8 +341,14 @@ class ArmModel:
 
         Joint i cannot move the tool point when the point lies on its axis whatever the joints
         after it do (they cannot move it either); with ``axis`` the tool axis must also lie
-        along joint i's axis. Returns self when every planned joint can move the tool.
+        along joint i's axis. Returns self when every planned joint can move the tool. Every
+        plan asks, so the answer is kept.
         """
+        if axis not in self._moving:
+            self._moving[axis] = self._without_idle_tail(axis)
+        return self._moving[axis]
+
+    def _without_idle_tail(self, axis: bool) -> ArmModel:
         planned = self.planned
         point, direction = self.tool_point, self.tool_axis
         for i in range(self.n_joints - 1, 0, -1):
