@@ -110,6 +110,8 @@ def test_the_start_says_where_each_joint_came_from() -> None:
     start = monitor.start(ARM, [0.1, 0.2, 0.3])
     assert start.q.tolist() == [1.0, -2.0, 3.0]
     assert start.describe() == ' [joint1, joint3 from trajectory end; joint2 from joint_states]'
+    monitor.forget()                                     # another arm: the names mean others
+    assert monitor.start(ARM, [0.1, 0.2, 0.3]).q.tolist() == [0.1, 0.2, 0.3]
 
 
 def request(tolerance: float, frame: str = '') -> GetPlan.Request:

@@ -134,3 +134,23 @@ def test_start_positions_must_match_the_chain(planner, describe, peer: RosClient
     results = peer.set_parameters(
         f'{NS}/trajplan', [Parameter('start_positions', value=[0.0, 0.1, 0.2, 0.3, 0.4])])
     assert results[0].successful
+
+
+def test_a_description_that_start_positions_does_not_fit(start_node, peer) -> None:
+    node = start_node('-r', '__ns:=/ur5_ns', '-p', 'start_positions:=[0.1, 0.2, 0.3, 0.4, 0.5]')
+    try:
+        pub = peer.node.create_publisher(String, '/ur5_ns/robot_description', LATCHED)
+        pub.publish(String(data=PUBLISHED['ur5'].urdf.read_text(encoding='utf-8')))
+        assert pub.wait_for_all_acked(Duration(seconds=30))
+        # six joints to the automatic tip: taken, with all zeros as the start meanwhile
+        node.wait_for(r'start_positions \[0.1, 0.2, 0.3, 0.4, 0.5\] does not fit the 6-joint '
+                      r'chain: the start is all zeros')
+        assert node.has(r'arm for the next plan: 6-joint arm \(shoulder_pan_joint')
+        refused = peer.set_parameters('/ur5_ns/trajplan',
+                                      [Parameter('start_positions', value=[0.1] * 5)])
+        assert not refused[0].successful and 'needs 6 joint angles' in refused[0].reason
+        taken = peer.set_parameters('/ur5_ns/trajplan',
+                                    [Parameter('start_positions', value=[0.1] * 6)])
+        assert taken[0].successful
+    finally:
+        assert node.stop() == 0, node.output

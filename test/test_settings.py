@@ -14,6 +14,7 @@ import pytest
 from trajplan_ros import paper_arm
 from trajplan_ros.kinematics import InvalidArmModel
 from trajplan_ros.ros.settings import default_values, PARAMETERS, Settings
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
 import yaml
 
 
@@ -88,3 +89,24 @@ def test_seed_minus_one_means_a_fresh_seed() -> None:
 def test_start_positions_may_give_the_planned_joints_only() -> None:
     settings = Settings.from_parameters({**default_values(), 'start_positions': [0.1] * 4})
     np.testing.assert_array_equal(settings.start, [0.1, 0.1, 0.1, 0.1, 0.0])
+
+
+def test_a_described_arm_never_reads_a_file_the_description_names(tmp_path) -> None:
+    secret = tmp_path / 'secret.urdf'
+    secret.write_text('<robot name="x"><link name="a"/></robot>')
+    # read as a file it would be a well-formed URDF, refused for its chain instead
+    with pytest.raises(ValueError, match='not well-formed XML'):
+        Settings.from_parameters({**default_values(), 'robot_description': str(secret)})
+
+
+def test_start_positions_that_do_not_fit_a_described_chain() -> None:
+    so101 = PUBLISHED['so101'].urdf.read_text(encoding='utf-8')
+    values = {**default_values(), 'start_positions': [0.1, 0.2, 0.3],
+              'tip_link': 'gripper_frame_link'}
+    with pytest.raises(ValueError, match='start_positions: a start needs 5 joint angles'):
+        Settings.from_parameters(values, so101)
+    lenient = Settings.from_parameters(values, so101, strict_start=False)
+    assert lenient.start_ignored and lenient.arm.n_joints == 5
+    np.testing.assert_array_equal(lenient.start,
+                                  np.clip(np.zeros(5), lenient.arm.lower, lenient.arm.upper))
+    assert lenient.base_frame == 'base_link'

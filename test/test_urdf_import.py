@@ -151,12 +151,37 @@ def _chain_urdf(joints: list[tuple[str, str]], extra: str = '') -> str:
                  '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'),
      None, None, r'ambiguous: .* end at l2, x'),
     ('<robot name="r"><link name="a"/>', None, None, r'not well-formed XML'),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')], '<joint name="back" type="fixed">'
+                 '<parent link="l2"/><child link="l0"/></joint>'), None, 'l2', r'cycle'),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')], '<link name="x"/><joint name="self" '
+                 'type="fixed"><parent link="x"/><child link="x"/></joint>'), 'l0', 'l2',
+     r'cycle'),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('<axis xyz="0 1 0"/>',
+                                                                 '<axis xyz="1 0"/>', 1),
+     None, None, r"joint 'a' has no usable axis"),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('<axis xyz="0 1 0"/>',
+                                                                 '<axis xyz="0 0 1 5"/>', 1),
+     None, None, r"joint 'a' has no usable axis"),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('velocity="1"',
+                                                                 'velocity="1e-320"', 1),
+     None, None, r'too slow to plan with'),
+    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('xyz="0 0 0.1"',
+                                                                 'xyz="0 0 1e308"', 1),
+     None, None, r'unusable origin'),
     ('<robot><link name="a"/></robot>', None, None, r'not <robot name='),
     ('/no/such/file.urdf', None, None, r'cannot read the URDF'),
 ])
 def test_bad_chains_are_refused_with_a_reason(text, base, tip, reason) -> None:
+    began = time.monotonic()
     with pytest.raises(InvalidArmModel, match=reason):
         ArmModel.from_urdf(text, base, tip)
+    assert time.monotonic() - began < 1.0                      # a cycle does not hang it
+
+
+def test_a_huge_tool_offset_is_refused() -> None:
+    so101 = PUBLISHED['so101']
+    with pytest.raises(InvalidArmModel, match='not an arm'):
+        ArmModel.from_urdf(so101.urdf, tool_offset=(1e308, 1e308, 0.0))
 
 
 BILLION_LAUGHS = '<?xml version="1.0"?><!DOCTYPE lolz [<!ENTITY lol "lol">' + ''.join(

@@ -257,6 +257,8 @@ class ArmModel:
         tool = np.stack((self.tool_point, self.tool_axis))
         put(self, '_tail', (tool[:, 0] + 1j * tool[:, 1], tool[:, 2].copy()))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
+        if not self.reach < 1e6:
+            raise InvalidArmModel(f'the links add up to {self.reach:.3g} m: not an arm')
 
     @classmethod
     def from_dh(cls, a: Sequence[float], alpha: Sequence[float], d: Sequence[float], *,

@@ -15,7 +15,8 @@ i's frame is its URDF joint frame (the parent link's frame moved by the joint or
 that z is the joint axis: child = parent * origin * A Rz(q) A^T with A z = axis, so the URDF
 joint value is q. Links off the chain (grippers, fingers, sensors) are ignored. A prismatic,
 floating, planar or mimic joint on the chain is refused, as are chains with fewer than 2 or more
-than 7 joints.
+than 7 joints, cycles, unusable axes and origins, and velocity limits below 1e-6 rad/s (a limit
+of 0, a placeholder in many files, means none).
 
 With no ``base_link`` the URDF's root is the base; with no ``tip_link`` the tip is the child
 link of the last revolute joint of the only longest-reaching chain of revolute joints below the
@@ -43,10 +44,14 @@ _MOVING = ('revolute', 'continuous')
 
 
 def _text(urdf: str | os.PathLike | bytes) -> bytes:
-    """Return the document's bytes, from XML text or a file path (size checked first)."""
+    """
+    Return the document's bytes, from XML text or a file path (size checked first).
+
+    Bytes are always the document itself, never a path (the node passes untrusted text so).
+    """
     if isinstance(urdf, bytes):
         data = urdf
-    elif isinstance(urdf, str) and urdf.lstrip().startswith('<'):
+    elif isinstance(urdf, str) and urdf.lstrip('\ufeff \t\r\n').startswith('<'):
         data = urdf.encode()
     else:
         try:
@@ -57,7 +62,9 @@ def _text(urdf: str | os.PathLike | bytes) -> bytes:
             with open(urdf, 'rb') as stream:
                 data = stream.read(MAX_BYTES + 1)
         except (OSError, TypeError, ValueError) as exc:
-            raise InvalidArmModel(f'cannot read the URDF {urdf!r}: '
+            shown = repr(os.fspath(urdf) if isinstance(urdf, os.PathLike) else urdf)
+            shown = shown if len(shown) <= 80 else shown[:77] + '...'
+            raise InvalidArmModel(f'cannot read the URDF {shown}: '
                                   f'{getattr(exc, "strerror", None) or exc}') from None
     if len(data) > MAX_BYTES:
         raise InvalidArmModel(f'the URDF is {len(data)} bytes, over the {MAX_BYTES} byte limit')
@@ -101,6 +108,13 @@ def _parents(robot: yourdfpy.Robot) -> dict[str, yourdfpy.Joint]:
             raise InvalidArmModel(f'link {joint.child!r} has two parent joints: '
                                   f'{parents[joint.child].name!r} and {joint.name!r}')
         parents[joint.child] = joint
+    for link in parents:                       # a tree has no cycle: every walk up ends
+        seen = {link}
+        while link in parents:
+            link = parents[link].parent
+            if link in seen:
+                raise InvalidArmModel(f'the URDF joints form a cycle through link {link!r}')
+            seen.add(link)
     return parents
 
 
@@ -159,7 +173,7 @@ def _to_axis(axis: np.ndarray) -> np.ndarray:
 def _joint_values(joint: yourdfpy.Joint) -> tuple[np.ndarray, float, float, float]:
     """Return a revolute joint's rotation A, its limits and velocity limit."""
     axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=float)
-    size = float(np.linalg.norm(axis))
+    size = float(np.linalg.norm(axis)) if axis.shape == (3,) else np.nan
     if not np.isfinite(size) or size < 1e-9:
         raise InvalidArmModel(f'joint {joint.name!r} has no usable axis: {axis.tolist()}')
     limit = joint.limit
@@ -168,10 +182,11 @@ def _joint_values(joint: yourdfpy.Joint) -> tuple[np.ndarray, float, float, floa
         if limit is None or limit.lower is None or limit.upper is None:
             raise InvalidArmModel(f'revolute joint {joint.name!r} has no lower and upper limit')
         lower, upper = float(limit.lower), float(limit.upper)
+    # a velocity limit of 0 (or none) is a placeholder in many files: no limit
     velocity = float(limit.velocity) if limit is not None and limit.velocity else np.inf
-    if not velocity > 0:
-        raise InvalidArmModel(f'joint {joint.name!r} has velocity limit {velocity}: it cannot '
-                              'move')
+    if not velocity >= 1e-6:
+        raise InvalidArmModel(f'joint {joint.name!r} has velocity limit {velocity} rad/s: too '
+                              'slow to plan with')
     return _to_axis(axis / size), lower, upper, velocity
 
 
@@ -204,6 +219,9 @@ def read_chain(urdf: str | os.PathLike | bytes, base_link: str | None = None,
     pending, links, values = np.eye(4), [], []
     for joint in _path(parents, base, tip):
         origin = np.eye(4) if joint.origin is None else np.asarray(joint.origin, dtype=float)
+        if origin.shape != (4, 4) or not np.all(np.abs(origin) <= 1e3):
+            raise InvalidArmModel(f'joint {joint.name!r} has an unusable origin (finite, '
+                                  'within 1 km)')
         pending = pending @ origin
         if joint.type == 'fixed':
             continue

@@ -75,6 +75,12 @@ class JointStateMonitor:
         with self._lock:
             self._measured.update({n: float(q) for n, q in zip(names, positions) if n in ours})
 
+    def forget(self) -> None:
+        """Drop every known joint angle (the arm changed: names may now mean other joints)."""
+        with self._lock:
+            self._measured.clear()
+            self._last_end.clear()
+
     def trajectory_ended(self, names: Sequence[str], angles: Sequence[float]) -> None:
         """Remember where the last published trajectory ends."""
         with self._lock:

@@ -174,35 +174,55 @@ class PlannerNode(Node):
     def _check_parameters(self, params: list[Parameter]) -> SetParametersResult:
         values = self._parameter_values()
         values.update({p.name: p.value for p in params})
+        # start_positions is held to the chain when it, or the description, is being set
+        strict = bool({p.name for p in params} & {'start_positions', 'robot_description'})
         try:
-            Settings.from_parameters(values, self._topic_description)
-        except ValueError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
+            Settings.from_parameters(values, self._topic_description, strict_start=strict)
+        except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
+            return SetParametersResult(successful=False, reason=_reason(exc))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
-        before = self._settings
-        self._settings = Settings.from_parameters(self._parameter_values(),
-                                                  self._topic_description)
+        self._use(Settings.from_parameters(self._parameter_values(), self._topic_description,
+                                           strict_start=False))
         shown = ', '.join(f'{p.name}=<{len(p.value)} characters>' if p.name == 'robot_description'
                           else f'{p.name}={p.value}' for p in params)
         self.get_logger().info(f'parameters set for the next plan: {shown}')
-        if self._settings.arm is not before.arm:
-            self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(self._settings)}')
 
     def _on_description(self, msg: String) -> None:
-        """Build the arm from a robot_description message, or log why it is refused."""
-        if self.get_parameter('robot_description').value:
-            self.get_logger().info('robot_description topic: ignored, the robot_description '
-                                   'parameter is set')
-            return
+        """
+        Build the arm from a robot_description message, or log why it is refused.
+
+        A usable description is kept even while the parameter wins, for when it is cleared.
+        """
+        values = self._parameter_values()
+        parameter = values['robot_description']
         try:
-            settings = Settings.from_parameters(self._parameter_values(), msg.data)
-        except ValueError as exc:
-            self.get_logger().warning(f'robot_description refused: {exc}; keeping '
+            settings = Settings.from_parameters({**values, 'robot_description': ''}, msg.data,
+                                                strict_start=False)
+        except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
+            self.get_logger().warning(f'robot_description refused: {_reason(exc)}; keeping '
                                       f'{jobs.describe_arm(self._settings)}')
             return
-        self._topic_description, self._settings = msg.data, settings
+        self._topic_description = msg.data
+        if parameter:
+            self.get_logger().info('robot_description topic: kept for later; the '
+                                   'robot_description parameter is set and wins')
+            return
+        self._use(settings)
+        if settings.start_ignored:
+            self.get_logger().warning(
+                f'start_positions {list(values["start_positions"])} does not fit the '
+                f'{settings.arm.n_joints}-joint chain: the start is all zeros until it is set '
+                '(or joint_states arrive)')
+
+    def _use(self, settings: Settings) -> None:
+        """Plan with ``settings`` from the next job; forget the old arm's states if it changed."""
+        before, self._settings = self._settings, settings
+        if settings.arm is before.arm:
+            return
+        if settings.arm.joint_names != before.arm.joint_names:
+            self._states.forget()
         self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(settings)}')
 
     # --- inputs (executor thread) -----------------------------------------------------------
@@ -390,6 +410,12 @@ class PlannerNode(Node):
         self._flushed.clear()
         self._flush.trigger()                            # one more turn: the last send is done
         self._flushed.wait(SHUTDOWN_STEP_S)
+
+
+def _reason(exc: Exception) -> str:
+    """Return a refusal's one-line reason (a fault other than ValueError named by its type)."""
+    text = str(exc).splitlines()[0] if str(exc) else ''
+    return text if isinstance(exc, ValueError) else f'{type(exc).__name__}: {text}'
 
 
 def _spin(executor: SingleThreadedExecutor, failure: list[BaseException]) -> None:

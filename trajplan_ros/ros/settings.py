@@ -12,7 +12,9 @@ The arm comes from a URDF when there is one: the ``robot_description`` parameter
 else the last description received on the ``robot_description`` topic. Then the chain from
 ``base_link`` to ``tip_link`` is planned (every revolute joint on it, with the URDF's names and
 limits), the ``arm.*`` DH parameters are ignored, ``start_positions`` must list every chain
-joint (its untouched default, five zeros for the paper arm, means all zeros) and ``base_frame``,
+joint (its untouched default, five zeros for the paper arm, means all zeros; a description
+that arrives while it lists other joints is not refused for it: the start is then all zeros
+until ``start_positions`` is set to match) and ``base_frame``,
 left at its default, becomes the chain's base link. Without a description the ``arm.*``
 parameters (the paper arm) apply.
 """
@@ -142,17 +144,22 @@ class Settings:
     diagnostic_period: float
     #: The URDF the arm was built from ('' for the DH parameters).
     description: str = ''
+    #: start_positions did not fit the described chain and all zeros stand in for it.
+    start_ignored: bool = False
 
     @classmethod
-    def from_parameters(cls, values: Mapping[str, Any], topic_description: str = '') -> Settings:
+    def from_parameters(cls, values: Mapping[str, Any], topic_description: str = '',
+                        strict_start: bool = True) -> Settings:
         """
         Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused.
 
-        ``topic_description`` is the last URDF received on the robot_description topic.
+        ``topic_description`` is the last URDF received on the robot_description topic. With
+        ``strict_start`` False, a ``start_positions`` that does not fit a described chain gives
+        all zeros instead of a refusal (``start_ignored`` says so).
         """
         description = values['robot_description'] or topic_description
         if description:
-            arm = _urdf_arm(description, values['base_link'] or None,
+            arm = _urdf_arm(description.encode(), values['base_link'] or None,
                             values['tip_link'] or None, tuple(values['tool_offset']),
                             tuple(values['tool_axis']))
         else:
@@ -169,8 +176,11 @@ class Settings:
             raise ValueError('base_frame must not be empty')
         start_positions, base_frame = values['start_positions'], values['base_frame']
         defaults = default_values()
-        if description and list(start_positions) == defaults['start_positions']:
-            start_positions = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
+        zeros = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
+        ignored = bool(description) and not strict_start and len(start_positions) not in (
+            arm.n_joints, arm.planned)
+        if description and (list(start_positions) == defaults['start_positions'] or ignored):
+            start_positions = zeros
         if description and base_frame == defaults['base_frame']:
             base_frame = arm.base_link
         try:
@@ -185,7 +195,7 @@ class Settings:
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
                    tolerance=values['tolerance'], axis_tolerance=values['axis_tolerance'],
-                   base_frame=base_frame, description=description,
+                   base_frame=base_frame, description=description, start_ignored=ignored,
                    sample_period=values['sample_period'], start=start,
                    max_planning_time=values['max_planning_time'],
                    max_trajectory_points=values['max_trajectory_points'],
@@ -194,8 +204,12 @@ class Settings:
 
 
 @functools.lru_cache(maxsize=4)
-def _urdf_arm(description: str, base_link: str | None, tip_link: str | None,
+def _urdf_arm(description: bytes, base_link: str | None, tip_link: str | None,
               tool_offset: tuple[float, ...], tool_axis: tuple[float, ...]) -> ArmModel:
-    """Return the chain of a URDF, parsed once per text and settings (every check asks)."""
+    """
+    Return the chain of a URDF, parsed once per text and settings (every check asks).
+
+    The description is passed as bytes: always the document, never a file path.
+    """
     return ArmModel.from_urdf(description, base_link, tip_link, tool_offset=tool_offset,
                               tool_axis=tool_axis)
