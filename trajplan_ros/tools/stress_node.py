@@ -129,6 +129,11 @@ def burst(env: dict[str, str], clients: int, calls: int) -> Result:
     callers = [RosClient(f'stress_caller{k}') for k in range(clients)]
     try:
         asked = [_goals(calls, seed=100 + k) for k in range(clients)]
+        # one call each first, answered: a client that has just seen the service may not be
+        # matched with it yet, and requests written before the match are lost (DDS discovery,
+        # before the node), which is not what this probe measures
+        for caller, goals in zip(callers, asked):
+            caller.call(GetPlan, 'plan_trajectory', plan_request(goals[0]))
         futures = [[c.call_async(GetPlan, 'plan_trajectory', plan_request(g)) for g in goals]
                    for c, goals in zip(callers, asked)]
         answers = sum(1 for c, fs in zip(callers, futures) for f in fs
@@ -140,7 +145,7 @@ def burst(env: dict[str, str], clients: int, calls: int) -> Result:
         node.stop()
     logged = [int(m.group(1)) for m in node.matches(r'\]: service call #(\d+) \(')]
     total = clients * calls
-    once = sorted(logged) == list(range(1, total + 1))
+    once = sorted(logged) == list(range(1, total + clients + 1))          # with the first calls
     met = answers == total and once and latency_met
     return met, [f'burst: {clients} clients x {calls} concurrent calls: {answers} of {total} '
                  f"answered, {'each planned once' if once else 'NOT each planned once'}: "
