@@ -135,6 +135,11 @@ def _chain_urdf(joints: list[tuple[str, str]], extra: str = '') -> str:
     return f'<?xml version="1.0"?><robot name="r">{links}{body}{extra}</robot>'
 
 
+def _first_joint(old: str, new: str) -> str:
+    """Return a two-joint chain with ``old`` replaced by ``new`` in its first joint."""
+    return _chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace(old, new, 1)
+
+
 @pytest.mark.parametrize('text, base, tip, reason', [
     (_chain_urdf([('a', 'revolute'), ('b', 'prismatic'), ('c', 'revolute')]), None, None,
      r"joint 'b' on the chain is prismatic"),
@@ -156,18 +161,12 @@ def _chain_urdf(joints: list[tuple[str, str]], extra: str = '') -> str:
     (_chain_urdf([('a', 'revolute'), ('b', 'revolute')], '<link name="x"/><joint name="self" '
                  'type="fixed"><parent link="x"/><child link="x"/></joint>'), 'l0', 'l2',
      r'cycle'),
-    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('<axis xyz="0 1 0"/>',
-                                                                 '<axis xyz="1 0"/>', 1),
-     None, None, r"joint 'a' has no usable axis"),
-    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('<axis xyz="0 1 0"/>',
-                                                                 '<axis xyz="0 0 1 5"/>', 1),
-     None, None, r"joint 'a' has no usable axis"),
-    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('velocity="1"',
-                                                                 'velocity="1e-320"', 1),
-     None, None, r'too slow to plan with'),
-    (_chain_urdf([('a', 'revolute'), ('b', 'revolute')]).replace('xyz="0 0 0.1"',
-                                                                 'xyz="0 0 1e308"', 1),
-     None, None, r'unusable origin'),
+    (_first_joint('<axis xyz="0 1 0"/>', '<axis xyz="1 0"/>'), None, None,
+     r"joint 'a' has no usable axis"),
+    (_first_joint('<axis xyz="0 1 0"/>', '<axis xyz="0 0 1 5"/>'), None, None,
+     r"joint 'a' has no usable axis"),
+    (_first_joint('velocity="1"', 'velocity="1e-320"'), None, None, r'too slow to plan with'),
+    (_first_joint('xyz="0 0 0.1"', 'xyz="0 0 1e308"'), None, None, r'unusable origin'),
     ('<robot><link name="a"/></robot>', None, None, r'not <robot name='),
     ('/no/such/file.urdf', None, None, r'cannot read the URDF'),
 ])

@@ -34,7 +34,7 @@ import numpy as np
 from trajplan_ros.kinematics.errors import InvalidArmModel
 import yourdfpy
 
-__all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'read_chain', 'read_urdf']
+__all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'joints_between', 'read_chain', 'read_urdf']
 
 #: Largest URDF accepted, bytes.
 MAX_BYTES = 10 * 1024 * 1024
@@ -127,6 +127,11 @@ def _path(parents: dict[str, yourdfpy.Joint], base: str, tip: str) -> list[yourd
         path.append(parents[link])
         link = parents[link].parent
     return path[::-1]
+
+
+def joints_between(robot: yourdfpy.Robot, base: str, tip: str) -> list[yourdfpy.Joint]:
+    """Return the joints from link ``base`` down to link ``tip`` (InvalidArmModel if none)."""
+    return _path(_parents(robot), base, tip)
 
 
 def _default_base(robot: yourdfpy.Robot, parents: dict[str, yourdfpy.Joint]) -> str:

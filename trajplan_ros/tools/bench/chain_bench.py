@@ -27,7 +27,7 @@ import warnings
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.kinematics.urdf_import import read_urdf
+from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf
 from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
 from trajplan_ros.tools.bench.methods import Answer, Method
 from trajplan_ros.tools.bench.report import format_table
@@ -188,12 +188,9 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
     ikpy only reaches a pose (from the start as its initial guess); it does not minimise time.
     In radial mode it is asked for the tool z axis along the goal ray.
     """
-    robot = read_urdf(urdf)
-    parents = {joint.child: joint for joint in robot.joints}
-    path, link = [arm.tip_link], arm.tip_link
-    while link != arm.base_link:
-        path[:0] = [parents[link].parent, parents[link].name]
-        link = parents[link].parent
+    path = [arm.base_link]                   # ikpy's elements: link, joint, link, ...
+    for joint in joints_between(read_urdf(urdf), arm.base_link, arm.tip_link):
+        path += [joint.name, joint.child]
     state: dict[str, object] = {}
 
     def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
