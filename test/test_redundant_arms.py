@@ -10,7 +10,8 @@ from scipy.optimize import linprog
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import plan
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import _vertex_minimax
+from trajplan_ros.planning.polish import _active_set_minimax, LARGEST, polish
+from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 
@@ -20,15 +21,15 @@ def published(name: str) -> ArmModel:
 
 
 @pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
-def test_the_vertex_step_is_the_linear_minimax(k: int, m: int) -> None:
+def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: int) -> None:
     rng = np.random.default_rng(k)
     compared = 0
-    for _ in range(60):
+    for _ in range(200):
         null = np.linalg.qr(rng.normal(size=(m, k)))[0].T[None]          # (1, k, m)
         b = rng.choice([-1.0, 1.0], (1, m)) * rng.uniform(1.0, 3.0, (1, m))
         scale = rng.uniform(1.0, 2.0, m)
-        z = _vertex_minimax(b, null, scale, np.full((1, m), -10.0), np.full((1, m), 10.0),
-                            np.array([100.0]))
+        z = _active_set_minimax(b, null, np.zeros((1, k, k, m)), scale, np.full((1, m), -10.0),
+                                np.full((1, m), 10.0), np.array([100.0]))
         ours = np.max(np.abs(b[0] + z[0] @ null[0]) * scale)
         assert ours <= np.max(np.abs(b[0]) * scale) + 1e-12             # never worse
         # the same problem as a linear programme: min t, -t <= scale (b + N^T z) <= t
@@ -36,11 +37,35 @@ def test_the_vertex_step_is_the_linear_minimax(k: int, m: int) -> None:
         rows = np.block([[a, -np.ones((m, 1))], [-a, -np.ones((m, 1))]])
         rhs = np.concatenate((-scale * b[0], scale * b[0]))
         best = linprog(np.eye(k + 1)[-1], A_ub=rows, b_ub=rhs, bounds=[(None, None)] * (k + 1))
-        moved = b[0] + best.x[:k] @ null[0]
-        if np.all(np.sign(moved) == np.sign(b[0])):      # the step keeps every joint's sign
+        moved = np.abs(b[0] + best.x[:k] @ null[0]) * scale
+        tying = np.flatnonzero(moved >= best.fun - 1e-9)
+        tried = np.argsort(-np.abs(b[0]) * scale)[: k + LARGEST]           # the sets it tries
+        if np.all(np.sign(b[0] + best.x[:k] @ null[0]) == np.sign(b[0])) and np.isin(
+                tying, tried).all():
             compared += 1
             assert ours == pytest.approx(best.fun, rel=1e-9, abs=1e-12)
     assert compared >= 10
+
+
+@pytest.mark.parametrize('name', ['so101', 'ur5', 'panda', 'xarm7'])
+def test_the_polish_finds_the_local_minimum_it_starts_near(name: str) -> None:
+    """From 0.05 rad off an SLSQP local minimum, the polish ends there or at another one."""
+    arm = published(name)
+    rng = np.random.default_rng(3)
+    for _ in range(8):
+        best = None
+        while best is None:
+            q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+            obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+            best = local_minimax(obj, rng.uniform(obj.lower, obj.upper))
+        x0 = np.clip(best + rng.normal(0.0, 0.05, best.shape), obj.lower, obj.upper)
+        x = polish(obj, x0[None], max_steps=40)[0]
+        ours = obj.motion_time(x[None])[0]
+        assert obj.errors(*obj.tool(x[None]))[0] <= 1e-9
+        if ours > obj.motion_time(best[None])[0] * (1 + 1e-4):
+            again = local_minimax(obj, x)                  # SLSQP sees no way down from ours
+            assert again is not None
+            assert obj.motion_time(again[None])[0] >= ours * (1 - 1e-4)
 
 
 def test_joints_beyond_a_turn_search_the_turn_nearest_the_start() -> None:

@@ -20,10 +20,20 @@ both where two joints tie and where one joint's displacement is at a smooth mini
 (a stretch of solutions along which the slowest joint does not move, so R stays the same) go
 to the least total joint travel sum |x_i - start_i|: the line search also checks where the
 travel is least, and the merit omega R + 1e-6 travel + W |c| accepts a step that lowers the
-travel at the same R. That makes plans repeatable. With more than one null direction (arms with
-more than four planned joints) the directions are taken in turn, a coordinate descent that may
-stop short of the optimum. A trust radius, a second-order correction and the merit make the
-steps safe.
+travel at the same R. That makes plans repeatable.
+
+With k >= 2 null directions (a 5- to 7-joint arm: the solutions form a k-dimensional set) the
+line searches are replaced by one step of sequential quadratic programming on the model
+x(z) = x + z N + z^T Q z of the solutions (Q from the second derivatives along every pair of
+null directions): each candidate active set (the joints tying with the largest displacement,
+chosen among the k + 2 largest, with none, one or both of the two nearest joint limits) gives
+a KKT solve; the best on the model wins (``_active_set_minimax``). Near a minimum that is
+Newton's method on the right active set: it converges in a few steps where a coordinate
+descent along the null directions stalls on the ridge where joints tie. Ties are then broken
+only by the merit's travel term and by ``iepso._fastest`` among the candidates.
+
+A trust radius, a second-order correction (chord Newton steps) and the merit make the steps
+safe.
 
 Being local, the polish cannot see a faster solution elsewhere on the curve of solutions
 through its answer, or on another curve; ``solution_curve`` follows them and seeds the polish.
@@ -41,6 +51,14 @@ from trajplan_ros.planning.objective import Objective
 __all__ = ['Linearisation', 'polish', 'settle']
 
 _TIE = 1e-12
+#: The active sets of ``_active_set_minimax`` tie joints among the k + LARGEST largest
+#: displacements and include none, one or both of the _WALLS nearest limits.
+LARGEST = 2
+_WALLS = 2
+#: On sets of 2+ dimensions: chord steps of the second-order correction, and the rejections
+#: in a row after which a candidate counts as converged.
+_CHORD_STEPS = 3
+_STALLED = 5
 #: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
 #: between steps that leave the motion time as it is (ties, see ``polish``).
 _TRAVEL_WEIGHT = 1e-6
@@ -52,53 +70,112 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=8)
-def _vertex_sets(m: int, k: int) -> np.ndarray:
+def _active_sets(r: int, k: int) -> tuple[np.ndarray, np.ndarray]:
     """
-    Return the sets of k + 1 pieces that can meet at a vertex of ``_vertex_minimax``.
+    Return the active sets that ``_active_set_minimax`` tries: pieces (C, k + 1), ties (C, k + 1).
 
-    Pieces 0..m-1 are the joints' displacements tying with the largest, piece m the limit
-    nearest to the candidate: sets of k + 1 ties, and sets of that limit and k ties.
+    Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r and
+    r + 1 the two limits nearest to the candidate, and r + 2 an unused slot; ``ties`` marks
+    the joints. Every set of 1 to k + 1 joints with none, either or both limits, at most k + 1
+    pieces in all.
     """
-    ties = list(itertools.combinations(range(m), k + 1))
-    bounded = [(m, *s) for s in itertools.combinations(range(m), k)]
-    return np.array(ties + bounded)
+    walls = [w for n in range(_WALLS + 1) for w in itertools.combinations(range(r, r + _WALLS), n)]
+    sets = [(*s, *w, *([r + _WALLS] * (k + 1 - j - len(w))))
+            for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
+            for s in itertools.combinations(range(r), j)]
+    pieces = np.array(sets)
+    return pieces, (pieces < r).astype(float)
 
 
-def _vertex_minimax(b: np.ndarray, null: np.ndarray, scale: np.ndarray, gap_lo: np.ndarray,
-                    gap_hi: np.ndarray, limit: np.ndarray) -> np.ndarray:
+def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
+            gap_lo: np.ndarray, gap_hi: np.ndarray, r: int
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
-    Return z (K, k) that minimises max_i scale_i |b_i + (z @ null)_i| within the limits.
+    Return the pieces of ``_active_sets`` per candidate: gradients, Hessians, KKT right sides.
 
-    b: (K, m) displacements; null: (K, k, m) orthonormal rows; the step z @ null must stay
-    within [gap_lo, gap_hi] (the joint limits) and ||z|| within ``limit``. The function is
-    convex and piecewise linear, so its least value lies at a vertex where k + 1 pieces meet:
-    joints tying with the largest displacement (each with the sign it has at z = 0), or the
-    joint nearest to a limit on it and k tying. Every such set gives a vertex by one small
-    linear solve (a tiny ridge keeps degenerate sets solvable; their vertices are judged like
-    the others); the best one inside the limits (or z = 0) is taken, then shortened to the
-    trust radius (which, by convexity, keeps it no worse than z = 0 and inside the limits).
+    Pieces: the r largest scaled displacements, each with its sign (g z - t = -e, e its size at
+    z = 0), the two nearest limits (n z = the gap to the limit), an unused slot (zeros).
+    Gradients (K, r + 3, k), Hessians (K, k, k, r + 3), right sides (K, r + 3).
     """
     k_count, k, m = null.shape
-    sets = _vertex_sets(m, k)                                            # (C, k + 1)
+    rows_k = np.arange(k_count)[:, None]
     sign = np.where(b >= 0.0, 1.0, -1.0) * scale
-    columns = np.swapaxes(null, 1, 2)                                    # (K, m, k)
-    ties = np.concatenate((columns * sign[:, :, None], -np.ones((k_count, m, 1))), axis=2)
-    rows_k = np.arange(k_count)
-    wall = np.argmin(np.minimum(gap_hi, -gap_lo), axis=1)                # the nearest limit
-    bound = np.where(gap_hi < -gap_lo, gap_hi, gap_lo)[rows_k, wall]
-    walls = np.concatenate((columns[rows_k, wall], np.zeros((k_count, 1))), axis=1)
-    rows = np.concatenate((ties, walls[:, None, :]), axis=1)             # (K, m + 1, k + 1)
-    rhs = np.concatenate((-sign * b, bound[:, None]), axis=1)            # (K, m + 1)
-    system, rhs = rows[:, sets], rhs[:, sets]                            # (K, C, k+1, k+1)
-    z = np.linalg.solve(system + 1e-13 * np.eye(k + 1), rhs[..., None])[..., :k, 0]
-    z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)          # (K, C + 1, k)
-    step = z @ null                                                      # (K, C + 1, m)
-    usable = np.all((step >= gap_lo[:, None, :] - 1e-12)
-                    & (step <= gap_hi[:, None, :] + 1e-12), axis=2)
-    worst = np.max(np.abs(b[:, None, :] + step) * scale, axis=2)         # (K, C + 1)
-    best = z[rows_k, np.argmin(np.where(usable, worst, np.inf), axis=1)]
-    size = np.sqrt(np.einsum('kj,kj->k', best, best))
-    return best * np.minimum(1.0, limit / np.maximum(size, 1e-300))[:, None]
+    top = np.argsort(-np.abs(b) * scale, axis=1)[:, :r]                     # (K, r)
+    walls = np.argsort(np.minimum(gap_hi, -gap_lo), axis=1)[:, :_WALLS]     # (K, 2)
+    bound = np.take_along_axis(np.where(gap_hi < -gap_lo, gap_hi, gap_lo), walls, axis=1)
+    columns = np.swapaxes(null, 1, 2)                                       # (K, m, k)
+    grad = np.concatenate(((columns * sign[:, :, None])[rows_k, top], columns[rows_k, walls],
+                           np.zeros((k_count, 1, k))), axis=1)
+    signed = np.take_along_axis(quad * sign[:, None, None, :], top[:, None, None, :], axis=3)
+    hess = 2.0 * np.concatenate((signed, np.take_along_axis(quad, walls[:, None, None, :], axis=3),
+                                 np.zeros((k_count, k, k, 1))), axis=3)
+    rhs = np.concatenate((-np.take_along_axis(np.abs(b) * scale, top, axis=1), bound,
+                          np.zeros((k_count, 1))), axis=1)
+    return grad, hess, rhs
+
+
+def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, pieces: np.ndarray,
+               ties: np.ndarray, idle: np.ndarray) -> np.ndarray:
+    """
+    Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
+
+    The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
+    Its KKT system in (z, t, multipliers y), with the Hessian of the Lagrangian sum_p y_p H_p
+    taken at least-squares multipliers (min |g^T y| with the ties' y summing to 1); unused
+    slots (``idle``, (C, p, p)) get y = 0.
+    """
+    k_count, k = grad.shape[0], grad.shape[2]
+    c, p = pieces.shape
+    g = grad[:, pieces]                                                     # (K, C, p, k)
+    ls = np.zeros((k_count, c, p + 1, p + 1))
+    ls[..., :p, :p] = g @ np.swapaxes(g, 2, 3) + idle + 1e-12 * np.eye(p)
+    ls[..., p, :p] = ls[..., :p, p] = ties
+    y = np.linalg.solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
+    n = k + 1 + p
+    kkt = np.zeros((k_count, c, n, n))
+    kkt[..., :k, :k] = np.einsum('kabcp,kcp->kcab', hess[..., pieces], y[..., :p, 0])
+    kkt[..., :k, k + 1:] = np.swapaxes(g, 2, 3)
+    kkt[..., k + 1:, :k] = g
+    kkt[..., k, k + 1:] = kkt[..., k + 1:, k] = -ties
+    kkt[..., k + 1:, k + 1:] = idle
+    right = np.zeros((k_count, c, n))
+    right[..., k] = -1.0
+    right[..., k + 1:] = rhs[:, pieces]
+    with np.errstate(all='ignore'):
+        z = np.linalg.solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
+    return np.where(np.isfinite(z), z, 0.0)
+
+
+def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
+                        gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray
+                        ) -> np.ndarray:
+    """
+    Return z (K, k) that minimises max_i scale_i |d_i(z)| on the quadratic model of the solutions.
+
+    d(z) = b + z N + z^T Q z (b (K, m): displacements; ``null`` (K, k, m): N, orthonormal rows;
+    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions). The steps must keep
+    the joints within [gap_lo, gap_hi] and ||z|| within ``limit``. Each active set (joints tying
+    with the largest displacement, each with its sign at z = 0, and none, one or both of the
+    nearest limits) gives the SQP step of min t subject to those pieces = t (the limits
+    reached), ``_sqp_steps``. With k + 1 pieces that is a vertex of the linear model, whatever
+    the Hessian. Every step is shortened to the trust radius and judged on the model (a limit
+    reached in the linear model may be passed by the curvature term: the judgement clips
+    that); the best, or z = 0, wins.
+    """
+    k_count, k, m = null.shape
+    r = min(m, k + LARGEST)
+    pieces, ties = _active_sets(r, k)                                      # (C, k + 1)
+    idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
+    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, ties, idle)
+    z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
+    size = np.sqrt(np.einsum('kcj,kcj->kc', z, z))
+    z *= np.minimum(1.0, limit[:, None] / np.maximum(size, 1e-300))[..., None]
+    bend = np.einsum('kca,kabm,kcb->kcm', z, quad, z)
+    step = z @ null + bend
+    lo, hi, bent = gap_lo[:, None, :], gap_hi[:, None, :], np.abs(bend) + 1e-12
+    usable = np.all((step >= lo - bent) & (step <= hi + bent), axis=2)
+    worst = np.max(np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale, axis=2)
+    return z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
 
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -206,36 +283,95 @@ class Linearisation:
             else:
                 self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
         self.half_curv = np.zeros_like(self.null)
-        for j in range(self.null.shape[1] if curvature else 0):
-            p2, u2 = d.curvature(self.null[:, j, :])
-            c2 = obj.linear_residuals(p2, u2)
-            self.half_curv[:, j, :] = 0.5 * self.newton(c2)
+        free = self.null.shape[1]
+        self.quad = np.zeros((k, free, free, dim))
+        for j in range(free if curvature else 0):
+            self.half_curv[:, j, :] = self.quad[:, j, j] = self._second(obj, d, self.null[:, j])
+        for a, b in itertools.combinations(range(free if curvature else 0), 2):
+            both = self._second(obj, d, self.null[:, a] + self.null[:, b])
+            self.quad[:, a, b] = self.quad[:, b, a] = (
+                0.5 * both - 0.5 * (self.half_curv[:, a] + self.half_curv[:, b]))
+
+    def _second(self, obj: Objective, d, n: np.ndarray) -> np.ndarray:
+        """Return half the second derivative of the solutions along null direction(s) n."""
+        return 0.5 * self.newton(obj.linear_residuals(*d.curvature(n)))
 
     def newton(self, res: np.ndarray) -> np.ndarray:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
         return -(self.pinv @ res[:, :, None])[:, :, 0]
 
+    _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'half_curv', 'quad')
+
     def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
-        for name in ('c', 'time', 'error', 'merit', 'pinv', 'null', 'half_curv'):
+        for name in self._FIELDS:
             mine, theirs = getattr(self, name), getattr(other, name)
             mine[mask] = theirs[mask]
 
+    def take(self, mask: np.ndarray) -> None:
+        """Keep only the candidates where mask is true."""
+        for name in self._FIELDS:
+            setattr(self, name, getattr(self, name)[mask])
 
-def _null_step(null: np.ndarray, base: np.ndarray, start: np.ndarray, scale: np.ndarray,
-               lo: np.ndarray, hi: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """
-    Return the step along the null space that lowers R most in the linear model, (K, m).
 
-    ``base``: the candidates after the Newton step; ``scale``: omega / omega_i. The step is
-    cut short where it would leave the joint limits (it stays within ``delta``).
+def _null_step(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.ndarray,
+               scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, delta: np.ndarray
+               ) -> np.ndarray:
     """
-    z = _vertex_minimax(base - start, null, scale, lo - base, hi - base, delta)
-    step = np.einsum('kj,kjm->km', z, null)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        room = np.where(step > 0, (hi - base) / step,
-                        np.where(step < 0, (lo - base) / step, np.inf))
-    return step * np.clip(np.min(room, axis=1), 0.0, 1.0)[:, None]
+    Return the candidates ``base`` (K, m) moved along the solutions to lower R (the SQP step).
+
+    ``base``: the candidates after the Newton step; ``scale``: omega / omega_i; ``delta``: the
+    trust radii. The step is the quadratic model's (``_active_set_minimax``), clipped to the
+    joint limits.
+    """
+    z = _active_set_minimax(base - start, null, quad, scale, lo - base, hi - base, delta)
+    step = np.einsum('kj,kjm->km', z, null) + np.einsum('ka,kabm,kb->km', z, quad, z)
+    return np.clip(base + step, lo, hi)
+
+
+def _line_searches(here: Linearisation, base: np.ndarray, start: np.ndarray,
+                   scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, radius: np.ndarray
+                   ) -> np.ndarray:
+    """Return ``base`` moved by the line searches along each null direction in turn."""
+    for j in range(here.null.shape[1]):
+        direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
+        with np.errstate(divide='ignore', invalid='ignore'):           # the joint limits along z
+            a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
+        moving = np.abs(direction) > 1e-15
+        zlo = functools.reduce(
+            np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -radius)
+        zhi = functools.reduce(
+            np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, radius)
+        zhi = np.maximum(zhi, zlo)
+        z = _line_minimax((base - start) * scale, direction * scale, half_curv * scale,
+                          zlo, zhi)[:, None]
+        base = base + (direction + half_curv * z) * z
+    return base
+
+
+def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarray,
+           wide: bool) -> np.ndarray:
+    """
+    Return the polish's trial points from candidates x (K, planned) and their linearisation.
+
+    The Newton step to the solutions (within the trust radii), the step along them (the line
+    searches, or on sets of 2+ dimensions the SQP step), the limits, then the second-order
+    correction: chord Newton steps with the Jacobian at x.
+    """
+    lo, hi, scale = obj.lower, obj.upper, obj.time_scale
+    start = obj.start[: obj.arm.planned]
+    step = here.newton(here.c)
+    size = np.sqrt(np.einsum('km,km->k', step, step))
+    step *= np.minimum(1.0, radius / np.maximum(size, 1e-300))[:, None]
+    base = x + step
+    if wide:
+        base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius)
+    else:
+        base = _line_searches(here, base, start, scale, lo, hi, radius)
+    trial = np.clip(base, lo, hi)
+    for _ in range(_CHORD_STEPS if wide else 1):
+        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)
+    return trial
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
@@ -248,49 +384,41 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     early when it returns True (each candidate's motion time, s, and constraint error, m, and
     whether its steps are still being accepted, not stalled by repeated rejections).
     """
-    lo, hi, scale = obj.lower, obj.upper, obj.time_scale
-    start = obj.start[: obj.arm.planned]
-    x = np.clip(np.array(x, dtype=float, ndmin=2), lo, hi)
+    x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
     # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
     # multiplier of this problem, so that the merit's minimum is the constrained one.
     weight = 1e3 / obj.arm.reach
     here = Linearisation(obj, x, weight)
+    wide = here.null.shape[1] > 1           # a set of solutions of 2 or more dimensions
     delta = np.full(k, trust)
     live = np.ones(k, dtype=bool)
+    rows = np.arange(k)                     # the candidates that take steps
+    rejected = np.zeros(k, dtype=int)
+    time, error = here.time.copy(), here.error.copy()
     for _ in range(max_steps):
-        step = here.newton(here.c)
-        size = np.sqrt(np.einsum('km,km->k', step, step))
-        step *= np.minimum(1.0, delta / np.maximum(size, 1e-300))[:, None]
-        base = x + step
-        if here.null.shape[1] > 1:          # a set of solutions of 2 or more dimensions
-            base = base + _null_step(here.null, base, start, scale, lo, hi, delta)
-        for j in range(here.null.shape[1]):
-            direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
-            with np.errstate(divide='ignore', invalid='ignore'):       # the joint limits along z
-                a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
-            moving = np.abs(direction) > 1e-15
-            zlo = functools.reduce(
-                np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -delta)
-            zhi = functools.reduce(
-                np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, delta)
-            zhi = np.maximum(zhi, zlo)
-            z = _line_minimax((base - start) * scale, direction * scale, half_curv * scale,
-                              zlo, zhi)[:, None]
-            base = base + (direction + half_curv * z) * z
-        trial = np.clip(base, lo, hi)
-        # second-order correction
-        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)
+        radius = delta[rows]
+        trial = _trial(obj, here, x[rows], radius, wide)
         there = Linearisation(obj, trial, weight)
-        moved = np.einsum('km,km->k', trial - x, trial - x)
-        accept = live & (there.merit < here.merit)
-        x[accept] = trial[accept]
+        moved = np.einsum('km,km->k', trial - x[rows], trial - x[rows])
+        accept = live[rows] & (there.merit < here.merit)
+        x[rows[accept]] = trial[accept]
         here.keep(there, accept)
-        delta = np.where(accept, np.minimum(2 * delta, trust), delta / 2)
-        live &= (moved > 1e-26) & (delta > 1e-13)
-        if not live.any() or (enough is not None
-                              and enough(here.time, here.error, delta >= trust / 5)):
+        delta[rows] = np.where(accept, np.minimum(2 * radius, trust), radius / 2)
+        live[rows] &= (moved > 1e-26) & (delta[rows] > 1e-13)
+        if wide:        # a candidate rejected _STALLED times in a row has converged: drop it
+            rejected[rows] = np.where(accept, 0, rejected[rows] + 1)
+            live[rows] &= rejected[rows] < _STALLED
+            going = live[rows]
+            delta[rows[~going]] = 0.0
+            rows = rows[going]
+            here.take(going)
+        if not live.any():
             break
+        if enough is not None:
+            time[rows], error[rows] = here.time, here.error
+            if enough(time, error, delta >= trust / 5):
+                break
     return x
 
 
