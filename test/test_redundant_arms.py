@@ -40,8 +40,8 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
         moved = np.abs(b[0] + best.x[:k] @ null[0]) * scale
         tying = np.flatnonzero(moved >= best.fun - 1e-9)
         tried = np.argsort(-np.abs(b[0]) * scale)[: k + LARGEST]           # the sets it tries
-        if np.all(np.sign(b[0] + best.x[:k] @ null[0]) == np.sign(b[0])) and np.isin(
-                tying, tried).all():
+        if (np.all(np.sign(b[0] + best.x[:k] @ null[0]) == np.sign(b[0]))
+                and np.isin(tying, tried).all() and tried[0] in tying):
             compared += 1
             assert ours == pytest.approx(best.fun, rel=1e-9, abs=1e-12)
     assert compared >= 10

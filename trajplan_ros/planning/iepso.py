@@ -97,8 +97,12 @@ FREE_DEFAULTS = {'swarms': 8, 'polish_count': 2, 'polish_steps': 6}
 RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
 
-#: Where the solutions form a set of two or more dimensions: how many of the fastest polished
-#: probes the curve search polishes further, and for how many steps (``_multistart``).
+#: Where the solutions form a set of two or more dimensions (``_multistart``): probes polished
+#: per ``curve_search`` point, probes drawn per probe polished, the first polish's trust radius
+#: (rad), and how many of the fastest polished probes are polished further, for how many steps.
+WIDE_PROBES = 3
+SCREENED = 3
+WIDE_TRUST = 1.5
 FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
@@ -317,11 +321,12 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     best = _answer(swarm, obj)
     here = obj(best[None, :])
     reached = bool(here.error[0] <= ON_GOAL)
-    points = np.concatenate((best[None, :],
-                             initial_population(rng, obj.lower, obj.upper, (probes,))))
     if curve_constraint(obj) is None and obj.arm.planned > (5 if obj.radial else 3):
-        polished = _multistart(obj, points, 2 * steps)
+        polished = _multistart(obj, swarm.gbest, _probes(obj, rng, probes * WIDE_PROBES),
+                               2 * steps)
     else:
+        points = np.concatenate((best[None, :],
+                                 initial_population(rng, obj.lower, obj.upper, (probes,))))
         seeds = curve_seeds(obj, points, best if reached else None)
         if not len(seeds):
             return
@@ -336,16 +341,41 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         swarm.replace_gbest(s, found[i], efficiency[i], error[i])
 
 
-def _multistart(obj: Objective, points: np.ndarray, steps: int) -> np.ndarray:
+def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
     """
-    Return ``points`` polished, and the fastest few polished further (ours).
+    Return ``SCREENED`` times ``count`` probes: half uniform, half around the start (ours).
+
+    Fast joint goals lie near the start, often on a limit: a probe around it is the start plus
+    normal noise of a scale drawn log-uniformly from 0.2 to 2 rad per probe, clipped into the
+    limits (so some joints sit on them).
+    """
+    drawn = SCREENED * count
+    start = obj.start[: obj.arm.planned]
+    sigma = np.exp(rng.uniform(np.log(0.2), np.log(2.0), (drawn // 2, 1)))
+    around = np.clip(start + sigma * rng.standard_normal((drawn // 2, start.size)),
+                     obj.lower, obj.upper)
+    uniform = initial_population(rng, obj.lower, obj.upper, (drawn - drawn // 2,))
+    return np.concatenate((uniform, around))
+
+
+def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int
+                ) -> np.ndarray:
+    """
+    Return the swarms' bests and the most promising probes polished, the fastest further (ours).
 
     Where the solutions form a set of two or more dimensions (more planned joints than the
-    constraints and one), there is no curve to follow: every point is polished ``steps``
-    steps, then the ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more (the polish
-    converges more slowly on such sets).
+    constraints and one), there is no curve to follow. The probes are screened: each is
+    projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
+    part whose projections are fastest on the goal is kept. The swarms' p_g and the kept probes
+    (as drawn: the polish from there, with its first steps as long as ``WIDE_TRUST``, reaches
+    more of the fast minima than from the projections) are polished ``steps`` steps, then the
+    ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more.
     """
-    first = polish_candidates(obj, project(obj, points, PROJECT_STEPS), max_steps=steps)
+    projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
+    ev = obj(projected)
+    keep = np.lexsort((ev.motion_time, ev.error > 1e-6 * obj.arm.reach))
+    points = np.concatenate((bests, probes[keep[: len(probes) // SCREENED]]))
+    first = polish_candidates(obj, points, max_steps=steps, trust=WIDE_TRUST)
     ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > ON_GOAL))[:FINISHED]
     finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS)

@@ -51,8 +51,8 @@ from trajplan_ros.planning.objective import Objective
 __all__ = ['Linearisation', 'polish', 'settle']
 
 _TIE = 1e-12
-#: The active sets of ``_active_set_minimax`` tie joints among the k + LARGEST largest
-#: displacements and include none, one or both of the _WALLS nearest limits.
+#: The active sets of ``_active_set_minimax`` tie the largest displacement with others among
+#: the k + LARGEST largest, and include none, one or both of the _WALLS nearest limits.
 LARGEST = 2
 _WALLS = 2
 #: On sets of 2+ dimensions: chord steps of the second-order correction, and the rejections
@@ -76,26 +76,28 @@ def _active_sets(r: int, k: int) -> tuple[np.ndarray, np.ndarray]:
 
     Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r and
     r + 1 the two limits nearest to the candidate, and r + 2 an unused slot; ``ties`` marks
-    the joints. Every set of 1 to k + 1 joints with none, either or both limits, at most k + 1
-    pieces in all.
+    the joints. Every set of 1 to k + 1 joints that holds the largest (near a minimum the
+    tying joints are the largest; away from one, a step that lowers the largest is what
+    counts), with none, either or both limits, at most k + 1 pieces in all.
     """
     walls = [w for n in range(_WALLS + 1) for w in itertools.combinations(range(r, r + _WALLS), n)]
     sets = [(*s, *w, *([r + _WALLS] * (k + 1 - j - len(w))))
             for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
-            for s in itertools.combinations(range(r), j)]
+            for s in itertools.combinations(range(r), j) if s[0] == 0]
     pieces = np.array(sets)
     return pieces, (pieces < r).astype(float)
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
             gap_lo: np.ndarray, gap_hi: np.ndarray, r: int
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
     Return the pieces of ``_active_sets`` per candidate: gradients, Hessians, KKT right sides.
 
     Pieces: the r largest scaled displacements, each with its sign (g z - t = -e, e its size at
     z = 0), the two nearest limits (n z = the gap to the limit), an unused slot (zeros).
-    Gradients (K, r + 3, k), Hessians (K, k, k, r + 3), right sides (K, r + 3).
+    Gradients (K, r + 3, k), Hessians (K, k, k, r + 3), right sides (K, r + 3), and the joint
+    of each piece (K, r + 3; -1 for the unused slot).
     """
     k_count, k, m = null.shape
     rows_k = np.arange(k_count)[:, None]
@@ -111,25 +113,32 @@ def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray
                                  np.zeros((k_count, k, k, 1))), axis=3)
     rhs = np.concatenate((-np.take_along_axis(np.abs(b) * scale, top, axis=1), bound,
                           np.zeros((k_count, 1))), axis=1)
-    return grad, hess, rhs
+    joint = np.concatenate((top, walls, np.full((k_count, 1), -1)), axis=1)
+    return grad, hess, rhs, joint
 
 
-def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, pieces: np.ndarray,
-               ties: np.ndarray, idle: np.ndarray) -> np.ndarray:
+def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.ndarray,
+               pieces: np.ndarray, ties: np.ndarray, idle: np.ndarray) -> np.ndarray:
     """
     Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
 
     The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
     Its KKT system in (z, t, multipliers y), with the Hessian of the Lagrangian sum_p y_p H_p
     taken at least-squares multipliers (min |g^T y| with the ties' y summing to 1); unused
-    slots (``idle``, (C, p, p)) get y = 0.
+    slots (``idle``, (C, p, p)) get y = 0. A set that ties a joint it also holds at a limit has
+    no step (z = 0).
     """
     k_count, k = grad.shape[0], grad.shape[2]
     c, p = pieces.shape
     g = grad[:, pieces]                                                     # (K, C, p, k)
+    gram = grad @ np.swapaxes(grad, 1, 2)                                   # (K, r + 3, r + 3)
+    held = joint[:, pieces]                                                 # (K, C, p)
+    clash = np.any((np.where(ties > 0, held, -2)[..., :, None]
+                    == np.where((ties == 0) & (held >= 0), held, -3)[..., None, :]), axis=(2, 3))
     ls = np.zeros((k_count, c, p + 1, p + 1))
-    ls[..., :p, :p] = g @ np.swapaxes(g, 2, 3) + idle + 1e-12 * np.eye(p)
+    ls[..., :p, :p] = gram[:, pieces[:, :, None], pieces[:, None, :]] + idle + 1e-12 * np.eye(p)
     ls[..., p, :p] = ls[..., :p, p] = ties
+    ls[clash] = np.eye(p + 1)
     y = np.linalg.solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
     n = k + 1 + p
     kkt = np.zeros((k_count, c, n, n))
@@ -141,8 +150,12 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, pieces: np.n
     right = np.zeros((k_count, c, n))
     right[..., k] = -1.0
     right[..., k + 1:] = rhs[:, pieces]
+    kkt[clash], right[clash] = np.eye(n), 0.0
     with np.errstate(all='ignore'):
-        z = np.linalg.solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
+        try:
+            z = np.linalg.solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
+        except np.linalg.LinAlgError:       # an exactly singular set: least squares for all
+            z = (np.linalg.pinv(kkt) @ right[..., None])[..., :k, 0]
     return np.where(np.isfinite(z), z, 0.0)
 
 
@@ -250,7 +263,8 @@ class Linearisation:
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
     singularities); with one null direction (the usual case) it is the largest column of the
-    projector I - J^+ J. ``curvature=False`` leaves the curvature out (zero), for speed.
+    projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its rank.
+    ``curvature=False`` leaves the curvature out (zero), for speed.
     """
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float,
@@ -274,14 +288,13 @@ class Linearisation:
         free = dim - rows
         if free <= 0:
             self.null = np.empty((k, 0, dim))
-        else:
+        elif free == 1:
             projector = np.eye(dim) - self.pinv @ jac
-            if free == 1:
-                col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
-                n = projector[np.arange(k), :, col]
-                self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
-            else:
-                self.null = np.swapaxes(np.linalg.svd(projector)[0][:, :, :free], 1, 2)
+            col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
+            n = projector[np.arange(k), :, col]
+            self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
+        else:           # the columns of a complete QR of J^T beyond its rank span the null space
+            self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.half_curv = np.zeros_like(self.null)
         free = self.null.shape[1]
         self.quad = np.zeros((k, free, free, dim))
