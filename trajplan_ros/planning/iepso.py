@@ -53,7 +53,10 @@ Additions of ours, documented in the README, each on by default because it measu
   The polish refines the seeds that could be faster than the answer, and the fastest replaces
   it. This finds the optima on a joint limit, at the end of an arc, and on a base or elbow
   branch that no swarm visited, which the swarms and a local polish miss now and then (0.1 % to
-  0.2 % of goals in tuning runs); ``curve_search=0`` turns it off;
+  0.2 % of goals in tuning runs); ``curve_search=0`` turns it off. Where the solutions form
+  sets of two or more dimensions (arms with more joints) there is no curve to follow, and a
+  multi-start polish from ``WIDE_PROBES`` times as many screened probes and every swarm's p_g
+  takes its place (``_multistart``);
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
