@@ -10,7 +10,7 @@ from scipy.optimize import linprog
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import plan
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import _active_set_minimax, LARGEST, polish
+from trajplan_ros.planning.polish import _active_set_minimax, _LARGEST, polish
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -39,7 +39,7 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
         best = linprog(np.eye(k + 1)[-1], A_ub=rows, b_ub=rhs, bounds=[(None, None)] * (k + 1))
         moved = np.abs(b[0] + best.x[:k] @ null[0]) * scale
         tying = np.flatnonzero(moved >= best.fun - 1e-9)
-        tried = np.argsort(-np.abs(b[0]) * scale)[: k + LARGEST]           # the sets it tries
+        tried = np.argsort(-np.abs(b[0]) * scale)[: k + _LARGEST]           # the sets it tries
         if (np.all(np.sign(b[0] + best.x[:k] @ null[0]) == np.sign(b[0]))
                 and np.isin(tying, tried).all() and tried[0] in tying):
             compared += 1

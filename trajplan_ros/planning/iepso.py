@@ -101,10 +101,13 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
 
 #: Where the solutions form a set of two or more dimensions (``_multistart``): probes polished
-#: per ``curve_search`` point, probes drawn per probe polished, the first polish's trust radius
-#: (rad), and how many of the fastest polished probes are polished further, for how many steps.
+#: per ``curve_search`` point, probes drawn per probe polished, the error (in arm reaches) up
+#: to which a projected probe counts as on the goal in that screening, the first polish's trust
+#: radius (rad), and how many of the fastest polished probes are polished further, for how
+#: many steps.
 WIDE_PROBES = 3
 SCREENED = 3
+SCREEN_ERROR = 1e-6
 WIDE_TRUST = 1.5
 FINISHED = 4
 FINISH_STEPS = 30
@@ -318,7 +321,9 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     the limits. A polished seed that ``_fastest`` prefers to the answer (or, while the goal is
     not reached, one with a lower F) replaces the best swarm's p_g. The seeds get twice the
     polish steps of a round (they may start a little off the solutions and far along them from
-    their minimum) and are settled by plain Newton steps (``polish.settle``).
+    their minimum) and are settled by plain Newton steps (``polish.settle``). Where the
+    solutions form sets of two or more dimensions, ``_multistart`` polishes ``WIDE_PROBES``
+    times ``probes`` screened probes and every swarm's p_g instead.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
@@ -370,13 +375,13 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     constraints and one), there is no curve to follow. The probes are screened: each is
     projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
     part whose projections are fastest on the goal is kept. The swarms' p_g and the kept probes
-    (as drawn: the polish from there, with its first steps as long as ``WIDE_TRUST``, reaches
-    more of the fast minima than from the projections) are polished ``steps`` steps, then the
+    (as drawn: the polish from there, with steps as long as ``WIDE_TRUST``, reaches more of
+    the fast minima than from the projections) are polished ``steps`` steps, then the
     ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more.
     """
     projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
     ev = obj(projected)
-    keep = np.lexsort((ev.motion_time, ev.error > 1e-6 * obj.arm.reach))
+    keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
     points = np.concatenate((bests, probes[keep[: len(probes) // SCREENED]]))
     first = polish_candidates(obj, points, max_steps=steps, trust=WIDE_TRUST)
     ev = obj(first)

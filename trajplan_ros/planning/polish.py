@@ -52,13 +52,15 @@ __all__ = ['Linearisation', 'polish', 'settle']
 
 _TIE = 1e-12
 #: The active sets of ``_active_set_minimax`` tie the largest displacement with others among
-#: the k + LARGEST largest, and include none, one or both of the _WALLS nearest limits.
-LARGEST = 2
+#: the k + _LARGEST largest, and include none, one or both of the _WALLS nearest limits.
+_LARGEST = 2
 _WALLS = 2
 #: On sets of 2+ dimensions: chord steps of the second-order correction, and the rejections
-#: in a row after which a candidate counts as converged.
+#: in a row after which a candidate with an error (m) at most _CONVERGED_ERROR counts as
+#: converged and leaves the batch.
 _CHORD_STEPS = 3
 _STALLED = 5
+_CONVERGED_ERROR = 1e-9
 #: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
 #: between steps that leave the motion time as it is (ties, see ``polish``).
 _TRAVEL_WEIGHT = 1e-6
@@ -136,10 +138,12 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     clash = np.any((np.where(ties > 0, held, -2)[..., :, None]
                     == np.where((ties == 0) & (held >= 0), held, -3)[..., None, :]), axis=(2, 3))
     ls = np.zeros((k_count, c, p + 1, p + 1))
-    ls[..., :p, :p] = gram[:, pieces[:, :, None], pieces[:, None, :]] + idle + 1e-12 * np.eye(p)
+    ls[..., :p, :p] = gram[:, pieces[:, :, None], pieces[:, None, :]] + idle
     ls[..., p, :p] = ls[..., :p, p] = ties
     ls[clash] = np.eye(p + 1)
-    y = np.linalg.solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
+    gram_trace = np.trace(ls[..., :p, :p], axis1=2, axis2=3)[..., None, None]
+    ls[..., :p, :p] += 1e-12 * gram_trace * np.eye(p)                      # a relative ridge
+    y = _solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
     n = k + 1 + p
     kkt = np.zeros((k_count, c, n, n))
     kkt[..., :k, :k] = np.einsum('kabcp,kcp->kcab', hess[..., pieces], y[..., :p, 0])
@@ -151,12 +155,17 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     right[..., k] = -1.0
     right[..., k + 1:] = rhs[:, pieces]
     kkt[clash], right[clash] = np.eye(n), 0.0
+    z = _solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
+    return np.where(np.isfinite(z), z, 0.0)
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return np.linalg.solve(a, b); least squares for all when one matrix is exactly singular."""
     with np.errstate(all='ignore'):
         try:
-            z = np.linalg.solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
-        except np.linalg.LinAlgError:       # an exactly singular set: least squares for all
-            z = (np.linalg.pinv(kkt) @ right[..., None])[..., :k, 0]
-    return np.where(np.isfinite(z), z, 0.0)
+            return np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            return np.linalg.pinv(a) @ b
 
 
 def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -171,22 +180,22 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     with the largest displacement, each with its sign at z = 0, and none, one or both of the
     nearest limits) gives the SQP step of min t subject to those pieces = t (the limits
     reached), ``_sqp_steps``. With k + 1 pieces that is a vertex of the linear model, whatever
-    the Hessian. Every step is shortened to the trust radius and judged on the model (a limit
-    reached in the linear model may be passed by the curvature term: the judgement clips
-    that); the best, or z = 0, wins.
+    the Hessian. Every step is shortened to the trust radius and judged on the model: its linear
+    part must keep within the limits, and where the curvature term passes a limit the joint is
+    clipped to it; the best, or z = 0, wins.
     """
     k_count, k, m = null.shape
-    r = min(m, k + LARGEST)
+    r = min(m, k + _LARGEST)
     pieces, ties = _active_sets(r, k)                                      # (C, k + 1)
     idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
     z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, ties, idle)
     z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
     size = np.sqrt(np.einsum('kcj,kcj->kc', z, z))
     z *= np.minimum(1.0, limit[:, None] / np.maximum(size, 1e-300))[..., None]
-    bend = np.einsum('kca,kabm,kcb->kcm', z, quad, z)
-    step = z @ null + bend
-    lo, hi, bent = gap_lo[:, None, :], gap_hi[:, None, :], np.abs(bend) + 1e-12
-    usable = np.all((step >= lo - bent) & (step <= hi + bent), axis=2)
+    linear = z @ null
+    step = linear + np.einsum('kca,kabm,kcb->kcm', z, quad, z)
+    lo, hi = gap_lo[:, None, :], gap_hi[:, None, :]
+    usable = np.all((linear >= lo - 1e-12) & (linear <= hi + 1e-12), axis=2)
     worst = np.max(np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale, axis=2)
     return z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
 
@@ -263,7 +272,10 @@ class Linearisation:
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
     singularities); with one null direction (the usual case) it is the largest column of the
-    projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its rank.
+    projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its row count
+    (where J loses rank, that basis misses a null direction). With two or more null directions
+    ``quad`` (K, k, k, planned) holds half the second derivatives of the solutions along every
+    pair of them (``_active_set_minimax``).
     ``curvature=False`` leaves the curvature out (zero), for speed.
     """
 
@@ -293,7 +305,7 @@ class Linearisation:
             col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
             n = projector[np.arange(k), :, col]
             self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
-        else:           # the columns of a complete QR of J^T beyond its rank span the null space
+        else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.half_curv = np.zeros_like(self.null)
         free = self.null.shape[1]
@@ -395,7 +407,9 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
 
     ``enough(time, error, active)``, if given, is asked after every step and ends the polish
     early when it returns True (each candidate's motion time, s, and constraint error, m, and
-    whether its steps are still being accepted, not stalled by repeated rejections).
+    whether its steps are still being accepted, not stalled by repeated rejections). On sets of
+    2+ dimensions a candidate on the solutions whose steps were rejected ``_STALLED`` times in a
+    row has converged: it takes no more steps and counts as not active.
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
@@ -419,19 +433,16 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         here.keep(there, accept)
         delta[rows] = np.where(accept, np.minimum(2 * radius, trust), radius / 2)
         live[rows] &= (moved > 1e-26) & (delta[rows] > 1e-13)
-        if wide:        # a candidate rejected _STALLED times in a row has converged: drop it
+        time[rows], error[rows] = here.time, here.error
+        if wide:        # on the solutions and rejected _STALLED times in a row: converged
             rejected[rows] = np.where(accept, 0, rejected[rows] + 1)
-            live[rows] &= rejected[rows] < _STALLED
+            live[rows] &= (rejected[rows] < _STALLED) | (here.error > _CONVERGED_ERROR)
             going = live[rows]
             delta[rows[~going]] = 0.0
             rows = rows[going]
             here.take(going)
-        if not live.any():
+        if not live.any() or (enough is not None and enough(time, error, delta >= trust / 5)):
             break
-        if enough is not None:
-            time[rows], error[rows] = here.time, here.error
-            if enough(time, error, delta >= trust / 5):
-                break
     return x
 
 
