@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 from typing import Any
 
 from geometry_msgs.msg import Point
@@ -22,8 +23,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
 from trajplan_ros.tools.node_process import TIMEOUT_S, wait_until
 
-
 __all__ = ['RosClient', 'plan_request']
+
+#: Seconds without an answer after which ``RosClient.call_idempotent`` sends its request again.
+RESEND_S = 5.0
 
 
 def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> GetPlan.Request:
@@ -90,11 +93,31 @@ class RosClient:
         """Call service ``name`` and wait for its answer."""
         return self.result(self.call_async(srv_type, name, request, timeout), timeout)
 
+    def call_idempotent(self, srv_type: Any, name: str, request: Any,
+                        timeout: float = TIMEOUT_S) -> Any:
+        """
+        Call service ``name`` and wait for its answer, sending the request again while none comes.
+
+        For requests that may be repeated (parameter gets and sets): a new client's first request
+        or its answer can be lost while DDS is still matching it with the service, although the
+        service is already discovered (ros2/rmw_fastrtps#418 and #842). The request goes again
+        every ``RESEND_S`` seconds until ``timeout``.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            future = self.call_async(srv_type, name, request, timeout)
+            wait = min(RESEND_S, deadline - time.monotonic())
+            try:
+                return self.result(future, max(wait, 0.0))
+            except TimeoutError:
+                if time.monotonic() >= deadline:
+                    raise TimeoutError(f'no answer from {name} within {timeout:g} s') from None
+
     def get_parameters(self, node: str, names: list[str],
                        timeout: float = TIMEOUT_S) -> list[Any]:
         """Python values of the named parameters of ``node`` (its full name)."""
-        answer = self.call(GetParameters, f'{node}/get_parameters',
-                           GetParameters.Request(names=names), timeout)
+        answer = self.call_idempotent(GetParameters, f'{node}/get_parameters',
+                                      GetParameters.Request(names=names), timeout)
         return [parameter_value_to_python(v) for v in answer.values]
 
     def set_parameters(self, node: str, params: list[Parameter],
@@ -102,10 +125,11 @@ class RosClient:
         """Set ``params`` on ``node`` (its full name); return the SetParametersResult list."""
         msgs = [p.to_parameter_msg() for p in params]
         if atomically:
-            return [self.call(SetParametersAtomically, f'{node}/set_parameters_atomically',
-                              SetParametersAtomically.Request(parameters=msgs)).result]
-        return self.call(SetParameters, f'{node}/set_parameters',
-                         SetParameters.Request(parameters=msgs)).results
+            return [self.call_idempotent(
+                SetParametersAtomically, f'{node}/set_parameters_atomically',
+                SetParametersAtomically.Request(parameters=msgs)).result]
+        return self.call_idempotent(SetParameters, f'{node}/set_parameters',
+                                    SetParameters.Request(parameters=msgs)).results
 
     # --- topics -----------------------------------------------------------------------------
 
