@@ -46,6 +46,7 @@ from typing import Callable
 
 import numpy as np
 
+from trajplan_ros.kinematics.arm import ToolJacobian
 from trajplan_ros.planning.objective import Objective
 
 __all__ = ['Linearisation', 'polish', 'settle']
@@ -317,7 +318,7 @@ class Linearisation:
             self.quad[:, a, b] = self.quad[:, b, a] = (
                 0.5 * both - 0.5 * (self.half_curv[:, a] + self.half_curv[:, b]))
 
-    def _second(self, obj: Objective, d, n: np.ndarray) -> np.ndarray:
+    def _second(self, obj: Objective, d: ToolJacobian, n: np.ndarray) -> np.ndarray:
         """Return half the second derivative of the solutions along null direction(s) n."""
         return 0.5 * self.newton(obj.linear_residuals(*d.curvature(n)))
 
