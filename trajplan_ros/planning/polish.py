@@ -266,17 +266,16 @@ class Linearisation:
     The constraints c(x) linearised at K candidates x, with what a polish step needs.
 
     That is c, the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null
-    space and, along each null direction n, half the curvature of the solution set:
-    x''/2 = -J^+ c''/2, with c'' the exact second derivative of c along n
-    (``ToolJacobian.curvature``).
+    space and ``quad`` (K, k, k, planned): half the second derivatives of the solution set along
+    every pair of null directions, on its diagonal x''/2 = -J^+ c''/2 along each direction n,
+    with c'' the exact second derivative of c along n (``ToolJacobian.curvature``).
 
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
     singularities); with one null direction (the usual case) it is the largest column of the
     projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its row count
-    (where J loses rank, that basis misses a null direction). With two or more null directions
-    ``quad`` (K, k, k, planned) holds half the second derivatives of the solutions along every
-    pair of them (``_active_set_minimax``).
+    (where J loses rank, that basis misses a null direction). The pairs off the diagonal of
+    ``quad`` serve the SQP step of two or more null directions (``_active_set_minimax``).
     ``curvature=False`` leaves the curvature out (zero), for speed.
     """
 
@@ -298,8 +297,8 @@ class Linearisation:
         damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
         inverse = _inverse(gram + damp * np.eye(size))
         self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
-        free = dim - rows
-        if free <= 0:
+        free = max(dim - rows, 0)
+        if free == 0:
             self.null = np.empty((k, 0, dim))
         elif free == 1:
             projector = np.eye(dim) - self.pinv @ jac
@@ -308,15 +307,13 @@ class Linearisation:
             self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
         else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
-        self.half_curv = np.zeros_like(self.null)
-        free = self.null.shape[1]
         self.quad = np.zeros((k, free, free, dim))
         for j in range(free if curvature else 0):
-            self.half_curv[:, j, :] = self.quad[:, j, j] = self._second(obj, d, self.null[:, j])
+            self.quad[:, j, j] = self._second(obj, d, self.null[:, j])
         for a, b in itertools.combinations(range(free if curvature else 0), 2):
             both = self._second(obj, d, self.null[:, a] + self.null[:, b])
             self.quad[:, a, b] = self.quad[:, b, a] = (
-                0.5 * both - 0.5 * (self.half_curv[:, a] + self.half_curv[:, b]))
+                0.5 * both - 0.5 * (self.quad[:, a, a] + self.quad[:, b, b]))
 
     def _second(self, obj: Objective, d: ToolJacobian, n: np.ndarray) -> np.ndarray:
         """Return half the second derivative of the solutions along null direction(s) n."""
@@ -326,7 +323,7 @@ class Linearisation:
         """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
         return -(self.pinv @ res[:, :, None])[:, :, 0]
 
-    _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'half_curv', 'quad')
+    _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
 
     def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
@@ -360,7 +357,7 @@ def _line_searches(here: Linearisation, base: np.ndarray, start: np.ndarray,
                    ) -> np.ndarray:
     """Return ``base`` moved by the line searches along each null direction in turn."""
     for j in range(here.null.shape[1]):
-        direction, half_curv = here.null[:, j, :], here.half_curv[:, j, :]
+        direction, half_curv = here.null[:, j, :], here.quad[:, j, j, :]
         with np.errstate(divide='ignore', invalid='ignore'):           # the joint limits along z
             a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
         moving = np.abs(direction) > 1e-15

@@ -95,7 +95,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
     length = np.tile(np.broadcast_to(step, (k,)), 2)[:, None]
     path = []
     for _ in range(steps):
-        ends = ends + (direction + here.half_curv[:, 0, :] * length) * length
+        ends = ends + (direction + here.quad[:, 0, 0, :] * length) * length
         here = Linearisation(curve, ends, 1.0)
         ends = ends + here.newton(here.c)
         turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
