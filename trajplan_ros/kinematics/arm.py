@@ -200,6 +200,7 @@ class ArmModel:
     tip_link: str
     _kinds: tuple[int, ...] = field(init=False, repr=False, compare=False)
     _tail: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
 
     def __init__(self, rotations: Sequence, translations: Sequence, *,
@@ -223,6 +224,7 @@ class ArmModel:
             raise InvalidArmModel('base must be a finite 4x4 transform')
         _rotations('base', base[None, :3, :3], 1)
         put(self, 'base', base)
+        put(self, '_moved_base', not np.array_equal(base, np.eye(4)))
         put(self, 'tool_point', _vector('tool_point', tool_point, 3))
         axis = _vector('tool_axis', tool_axis, 3)
         if not np.linalg.norm(axis) > 1e-9:
@@ -330,7 +332,7 @@ class ArmModel:
     @property
     def dh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Return (a, alpha, d) when the chain is a standard DH chain (``from_dh``), else None."""
-        plain = (np.array_equal(self.base, np.eye(4)) and not self.tool_point.any()
+        plain = (not self._moved_base and not self.tool_point.any()
                  and np.array_equal(self.tool_axis, (0.0, 0.0, 1.0)))
         if not plain or any(k == _GENERAL for k in self._kinds) or self.translations[:, 1].any():
             return None
@@ -433,7 +435,7 @@ class ArmModel:
             w, z = self._chain(q, self.n_joints, 0, self._tail, jacobian)
         else:
             w, z = self._chain(q, self.planned, 0, tail, jacobian)
-        if not np.array_equal(self.base, np.eye(4)):
+        if self._moved_base:
             w, z = _turn(self.base[:3, :3], w, z)
             w[0] += complex(*self.base[:2, 3])
             z[0] += self.base[2, 3]

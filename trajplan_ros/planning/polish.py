@@ -67,6 +67,13 @@ _CONVERGED_ERROR = 1e-9
 _TRAVEL_WEIGHT = 1e-6
 
 
+@functools.lru_cache(maxsize=16)
+def _eye(n: int) -> np.ndarray:
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
 @functools.lru_cache(maxsize=8)
 def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
     return np.triu_indices(m, 1)
@@ -286,22 +293,22 @@ class Linearisation:
         self.time = obj.motion_time(x)
         self.error = obj.errors(d.p, d.u)
         travel = np.abs(x - obj.start[: obj.arm.planned]).sum(axis=1)
-        self.merit = (self.time * obj.omega + _TRAVEL_WEIGHT * travel
-                      + weight * np.sqrt(np.einsum('kr,kr->k', self.c, self.c)))
+        size = (np.sqrt(np.einsum('kr,kr->k', self.c, self.c)) if obj.radial
+                else self.error)                             # free mode: c = p - goal
+        self.merit = self.time * obj.omega + _TRAVEL_WEIGHT * travel + weight * size
         jac = (np.concatenate((d.jp, obj.ray_basis[1:] @ d.ju), axis=1) if obj.radial
                else d.jp)
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)
         gram = jac @ jt if rows <= dim else jt @ jac
-        size = gram.shape[1]
         damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
-        inverse = _inverse(gram + damp * np.eye(size))
+        inverse = _inverse(gram + damp * _eye(gram.shape[1]))
         self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
         free = max(dim - rows, 0)
         if free == 0:
             self.null = np.empty((k, 0, dim))
         elif free == 1:
-            projector = np.eye(dim) - self.pinv @ jac
+            projector = _eye(dim) - self.pinv @ jac
             col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
             n = projector[np.arange(k), :, col]
             self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
