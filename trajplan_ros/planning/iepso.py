@@ -50,9 +50,10 @@ Additions of ours, documented in the README, each on by default because it measu
   both ways through the limits, and returns the points where the motion time is least along
   them (on position-only curves, where the tool axis comes nearest the goal ray), where they
   enter, leave or just touch the limits, and, ten times as finely sampled, near the answer.
-  The polish refines the seeds that could be faster than the answer, and the fastest replaces
-  it. This finds the optima on a joint limit, at the end of an arc, and on a base or elbow
-  branch that no swarm visited, which the swarms and a local polish miss now and then (0.1 % to
+  The polish refines the seeds that could be faster than the answer (ending early like a
+  polish round, below, once one has settled), and the fastest replaces it. This finds the
+  optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
+  visited, which the swarms and a local polish miss now and then (0.1 % to
   0.2 % of goals in tuning runs); ``curve_search=0`` turns it off. Where the solutions form
   sets of two or more dimensions (arms with more joints) there is no curve to follow, and a
   multi-start polish from ``WIDE_PROBES`` times as many screened probes and every swarm's p_g
@@ -321,9 +322,11 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     the limits. A polished seed that ``_fastest`` prefers to the answer (or, while the goal is
     not reached, one with a lower F) replaces the best swarm's p_g. The seeds get twice the
     polish steps of a round (they may start a little off the solutions and far along them from
-    their minimum) and are settled by plain Newton steps (``polish.settle``). Where the
-    solutions form sets of two or more dimensions, ``_multistart`` polishes ``WIDE_PROBES``
-    times ``probes`` screened probes and every swarm's p_g instead.
+    their minimum), end early once one has settled on the goal and no candidate still converging
+    could beat it (``_polish_is_enough``), and are settled by plain Newton steps
+    (``polish.settle``). Where the solutions form sets of two or more dimensions,
+    ``_multistart`` polishes ``WIDE_PROBES`` times ``probes`` screened probes and every swarm's
+    p_g instead.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
@@ -338,7 +341,9 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         seeds = curve_seeds(obj, points, best if reached else None)
         if not len(seeds):
             return
-        polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps), ON_GOAL)
+        enough = _polish_is_enough(1, obj.arm.reach / 8)
+        polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps, enough=enough),
+                          ON_GOAL)
     found = np.concatenate((best[None, :], polished))
     ev = obj(polished)
     efficiency = np.concatenate((here.efficiency, ev.efficiency))
