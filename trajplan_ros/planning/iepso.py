@@ -114,6 +114,10 @@ FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
 
+#: Trust radius (rad) above which a candidate in a polish round still counts as converging
+#: (``_polish_is_enough``): a fifth of the polish's, after three rejected steps in a row.
+ACTIVE_RADIUS = 0.1
+
 #: Error (m) below which a refined candidate counts towards agreement. Reaching eps is not
 #: enough: eq. (17) rewards the last 5e-10 m with 12 s of F, so a fast candidate still settling
 #: at 1e-6 m loses the final choice (least F) to a slower one at 1e-16 m. Below 1e-14 m the
@@ -187,39 +191,44 @@ def _linear(bounds: tuple[float, float], frac: float) -> float:
     return bounds[0] + (bounds[1] - bounds[0]) * frac
 
 
-def _agreeing(motion_time: np.ndarray, error: np.ndarray) -> tuple[int, float]:
+def _agreeing(motion_time: np.ndarray, error: np.ndarray, settled: float = SETTLED
+              ) -> tuple[int, float]:
     """
     Count the candidates that agree on the answer.
 
-    They have settled on the goal (error <= ``SETTLED``) within 1e-6 of the best such motion
-    time. Return their number and that best time (0 and inf when none has settled).
+    They have settled on the goal (error at most ``settled``) within 1e-6 of the best such
+    motion time. Return their number and that best time (0 and inf when none has settled).
     """
-    reached = error <= SETTLED
+    reached = error <= settled
     if not reached.any():
         return 0, np.inf
     best = motion_time[reached].min()
     return int(np.count_nonzero(reached & (motion_time <= best * (1 + 1e-6)))), float(best)
 
 
-def _polish_is_enough(agreement: int, near: float) -> _Enough:
+def _polish_is_enough(agreement: int, near: float, active: float = ACTIVE_RADIUS,
+                      settled: float = SETTLED, faster: bool = True) -> _Enough:
     """
-    Build the early stop of one polish round.
+    Build the early stop of one polish.
 
-    Stop once ``agreement`` candidates agree and no candidate still converging (its steps still
-    accepted, within ``near`` of the goal) could beat their answer: one not yet settled that is
-    faster, or a settled one within 1 % of their time whose time still went down in the last
-    step (sliding along the solutions towards a minimum).
+    Stop once ``agreement`` candidates agree (``_agreeing``, settled: error at most
+    ``settled``) and no candidate still converging (its trust radius above ``active``, within
+    ``near`` of the goal) could beat their answer: one not yet settled that is faster (or,
+    without ``faster``, any one not yet settled: off the goal a candidate can be slower on its
+    way to a faster solution), or a settled one within 1 % of their time whose time still went
+    down in the last step (sliding along the solutions towards a minimum).
     """
     previous: list[np.ndarray] = []
 
-    def enough(motion_time: np.ndarray, error: np.ndarray, active: np.ndarray) -> bool:
+    def enough(motion_time: np.ndarray, error: np.ndarray, radius: np.ndarray) -> bool:
         sliding = (motion_time < previous[0] * (1 - 1e-12) if previous
                    else np.ones(motion_time.shape, dtype=bool))
         previous[:] = [motion_time.copy()]
-        agree, best_time = _agreeing(motion_time, error)
-        settling = (error > SETTLED) & (motion_time < best_time)
+        agree, best_time = _agreeing(motion_time, error, settled)
+        settling = (error > settled) & ((motion_time < best_time) | (not faster))
         sliding &= motion_time < best_time * 1.01
-        return agree >= agreement and not np.any(active & (error < near) & (settling | sliding))
+        return agree >= agreement and not np.any(
+            (radius > active) & (error < near) & (settling | sliding))
     return enough
 
 
@@ -341,7 +350,8 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         seeds = curve_seeds(obj, points, best if reached else None)
         if not len(seeds):
             return
-        enough = _polish_is_enough(1, obj.arm.reach / 8)
+        enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL,
+                                   faster=False)
         polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps, enough=enough),
                           ON_GOAL)
     found = np.concatenate((best[None, :], polished))

@@ -32,8 +32,9 @@ Newton's method on the right active set: it converges in a few steps where a coo
 descent along the null directions stalls on the ridge where joints tie. Ties are then broken
 only by the merit's travel term and by ``iepso._fastest`` among the candidates.
 
-A trust radius, a second-order correction (chord Newton steps) and the merit make the steps
-safe.
+A trust radius, a second-order correction (chord Newton steps, each within the trust radius:
+near a singular pose a chord step can be far longer than the step it corrects, and a
+candidate whose every trial is such a leap never moves) and the merit make the steps safe.
 
 Being local, the polish cannot see a faster solution elsewhere on the curve of solutions
 through its answer, or on another curve; ``solution_curve`` follows them and seeds the polish.
@@ -62,6 +63,9 @@ _WALLS = 2
 _CHORD_STEPS = 3
 _STALLED = 5
 _CONVERGED_ERROR = 1e-9
+#: Trust radius (rad) below which a candidate has converged: the motion time it could still
+#: gain is of the order of this radius over omega.
+_SMALLEST_RADIUS = 1e-9
 #: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
 #: between steps that leave the motion time as it is (ties, see ``polish``).
 _TRAVEL_WEIGHT = 1e-6
@@ -386,22 +390,25 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
 
     The Newton step to the solutions (within the trust radii), the step along them (the line
     searches, or on sets of 2+ dimensions the SQP step), the limits, then the second-order
-    correction: chord Newton steps with the Jacobian at x.
+    correction: chord Newton steps with the Jacobian at x, each within the trust radius.
     """
     lo, hi, scale = obj.lower, obj.upper, obj.time_scale
     start = obj.start[: obj.arm.planned]
-    step = here.newton(here.c)
-    size = np.sqrt(np.einsum('km,km->k', step, step))
-    step *= np.minimum(1.0, radius / np.maximum(size, 1e-300))[:, None]
-    base = x + step
+    base = x + _within(here.newton(here.c), radius)
     if wide:
         base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius)
     else:
         base = _line_searches(here, base, start, scale, lo, hi, radius)
     trial = np.clip(base, lo, hi)
     for _ in range(_CHORD_STEPS if wide else 1):
-        trial = np.clip(trial + here.newton(_residuals(obj, trial)), lo, hi)
+        trial = np.clip(trial + _within(here.newton(_residuals(obj, trial)), radius), lo, hi)
     return trial
+
+
+def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """Return the steps (K, m) shortened to at most ``radius`` (K,) each."""
+    size = np.sqrt(np.einsum('km,km->k', step, step))
+    return step * np.minimum(1.0, radius / np.maximum(size, 1e-300))[:, None]
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
@@ -410,11 +417,12 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     """
     Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
-    ``enough(time, error, active)``, if given, is asked after every step and ends the polish
-    early when it returns True (each candidate's motion time, s, and constraint error, m, and
-    whether its steps are still being accepted, not stalled by repeated rejections). On sets of
-    2+ dimensions a candidate on the solutions whose steps were rejected ``_STALLED`` times in a
-    row has converged: it takes no more steps and counts as not active.
+    ``enough(time, error, radius)``, if given, is asked after every step and ends the polish
+    early when it returns True (each candidate's motion time, s, constraint error, m, and trust
+    radius, rad: halved or less by each rejected step, doubled by each accepted one up to
+    ``trust``, and 0 once converged). A candidate has converged when its radius falls to
+    ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also when it is on the solutions and its
+    steps were rejected ``_STALLED`` times in a row (it then takes no more steps).
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
@@ -432,21 +440,24 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         radius = delta[rows]
         trial = _trial(obj, here, x[rows], radius, wide)
         there = Linearisation(obj, trial, weight)
-        moved = np.einsum('km,km->k', trial - x[rows], trial - x[rows])
+        moved = np.sqrt(np.einsum('km,km->k', trial - x[rows], trial - x[rows]))
         accept = live[rows] & (there.merit < here.merit)
         x[rows[accept]] = trial[accept]
         here.keep(there, accept)
-        delta[rows] = np.where(accept, np.minimum(2 * radius, trust), radius / 2)
-        live[rows] &= (moved > 1e-26) & (delta[rows] > 1e-13)
+        # a rejected step shrinks the radius below its own length: the same trial again
+        # would be rejected again
+        delta[rows] = np.where(accept, np.minimum(2 * radius, trust),
+                               np.minimum(radius, moved) / 2)
+        live[rows] &= delta[rows] > _SMALLEST_RADIUS
         time[rows], error[rows] = here.time, here.error
         if wide:        # on the solutions and rejected _STALLED times in a row: converged
             rejected[rows] = np.where(accept, 0, rejected[rows] + 1)
             live[rows] &= (rejected[rows] < _STALLED) | (here.error > _CONVERGED_ERROR)
             going = live[rows]
-            delta[rows[~going]] = 0.0
             rows = rows[going]
             here.take(going)
-        if not live.any() or (enough is not None and enough(time, error, delta >= trust / 5)):
+        delta[~live] = 0.0
+        if not live.any() or (enough is not None and enough(time, error, delta)):
             break
     return x
 
