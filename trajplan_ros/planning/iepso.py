@@ -329,10 +329,11 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
 
     The curves are those through the answer so far and through ``probes`` points drawn inside
     the limits. A polished seed that ``_fastest`` prefers to the answer (or, while the goal is
-    not reached, one with a lower F) replaces the best swarm's p_g. The seeds get twice the
-    polish steps of a round (they may start a little off the solutions and far along them from
-    their minimum), end early once one has settled on the goal and no candidate still converging
-    could beat it (``_polish_is_enough``), and are settled by plain Newton steps
+    not reached, one with a lower F) replaces the best swarm's p_g. The seeds get four times
+    the polish steps of a round (they may start a little off the solutions and far along them
+    from their minimum, and near a straight elbow the polish converges only linearly), end early
+    once one has settled on the goal and no candidate still converging could beat it
+    (``_polish_is_enough``), and are settled by plain Newton steps
     (``polish.settle``). Where the solutions form sets of two or more dimensions,
     ``_multistart`` polishes ``WIDE_PROBES`` times ``probes`` screened probes and every swarm's
     p_g instead.
@@ -352,7 +353,7 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
             return
         enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL,
                                    faster=False)
-        polished = settle(obj, polish_candidates(obj, seeds, max_steps=2 * steps, enough=enough),
+        polished = settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, enough=enough),
                           ON_GOAL)
     found = np.concatenate((best[None, :], polished))
     ev = obj(polished)
