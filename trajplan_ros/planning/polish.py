@@ -202,8 +202,7 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
     z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, ties, idle)
     z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
-    size = np.sqrt(np.einsum('kcj,kcj->kc', z, z))
-    z *= np.minimum(1.0, limit[:, None] / np.maximum(size, 1e-300))[..., None]
+    z = _within(z, limit[:, None])
     linear = z @ null
     step = linear + np.einsum('kca,kabm,kcb->kcm', z, quad, z)
     lo, hi = gap_lo[:, None, :], gap_hi[:, None, :]
@@ -406,9 +405,9 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
 
 
 def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Return the steps (K, m) shortened to at most ``radius`` (K,) each."""
-    size = np.sqrt(np.einsum('km,km->k', step, step))
-    return step * np.minimum(1.0, radius / np.maximum(size, 1e-300))[:, None]
+    """Return the steps (..., m) shortened to at most ``radius`` (...) each."""
+    size = np.sqrt(np.einsum('...m,...m->...', step, step))
+    return step * np.minimum(1.0, radius / np.maximum(size, 1e-300))[..., None]
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
