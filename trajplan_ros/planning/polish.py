@@ -430,8 +430,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     weight = 1e3 / obj.arm.reach
     here = Linearisation(obj, x, weight)
     wide = here.null.shape[1] > 1           # a set of solutions of 2 or more dimensions
-    delta = np.full(k, trust)
-    live = np.ones(k, dtype=bool)
+    delta = np.full(k, trust)               # the trust radii; 0 once converged
     rows = np.arange(k)                     # the candidates that take steps
     rejected = np.zeros(k, dtype=int)
     time, error = here.time.copy(), here.error.copy()
@@ -440,23 +439,23 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         trial = _trial(obj, here, x[rows], radius, wide)
         there = Linearisation(obj, trial, weight)
         moved = np.sqrt(np.einsum('km,km->k', trial - x[rows], trial - x[rows]))
-        accept = live[rows] & (there.merit < here.merit)
+        accept = (radius > 0.0) & (there.merit < here.merit)
         x[rows[accept]] = trial[accept]
         here.keep(there, accept)
         # a rejected step shrinks the radius below its own length: the same trial again
         # would be rejected again
         delta[rows] = np.where(accept, np.minimum(2 * radius, trust),
                                np.minimum(radius, moved) / 2)
-        live[rows] &= delta[rows] > _SMALLEST_RADIUS
+        converged = delta[rows] <= _SMALLEST_RADIUS
         time[rows], error[rows] = here.time, here.error
         if wide:        # on the solutions and rejected _STALLED times in a row: converged
             rejected[rows] = np.where(accept, 0, rejected[rows] + 1)
-            live[rows] &= (rejected[rows] < _STALLED) | (here.error > _CONVERGED_ERROR)
-            going = live[rows]
-            rows = rows[going]
-            here.take(going)
-        delta[~live] = 0.0
-        if not live.any() or (enough is not None and enough(time, error, delta)):
+            converged |= (rejected[rows] >= _STALLED) & (here.error <= _CONVERGED_ERROR)
+        delta[rows[converged]] = 0.0
+        if wide:        # converged candidates leave the batch
+            rows = rows[~converged]
+            here.take(~converged)
+        if not delta.any() or (enough is not None and enough(time, error, delta)):
             break
     return x
 
