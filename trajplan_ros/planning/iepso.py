@@ -53,11 +53,11 @@ Additions of ours, documented in the README, each on by default because it measu
   The polish refines the seeds that could be faster than the answer (ending early like a
   polish round, below, once one has settled), and the fastest replaces it. This finds the
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
-  visited, which the swarms and a local polish miss now and then (0.1 % to
-  0.2 % of goals in tuning runs); ``curve_search=0`` turns it off. Where the solutions form
-  sets of two or more dimensions (arms with more joints) there is no curve to follow, and a
-  multi-start polish from ``WIDE_PROBES`` times as many screened probes and every swarm's p_g
-  takes its place (``_multistart``);
+  visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
+  tuning runs); ``curve_search=0`` turns it off. Where the solutions form sets of two or more
+  dimensions (arms with more joints) there is no curve to follow, and a multi-start polish from
+  ``WIDE_PROBES`` times as many screened probes and every swarm's p_g takes its place
+  (``_multistart``);
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -333,10 +333,9 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     the polish steps of a round (they may start a little off the solutions and far along them
     from their minimum, and near a straight elbow the polish converges only linearly), end early
     once one has settled on the goal and no candidate still converging could beat it
-    (``_polish_is_enough``), and are settled by plain Newton steps
-    (``polish.settle``). Where the solutions form sets of two or more dimensions,
-    ``_multistart`` polishes ``WIDE_PROBES`` times ``probes`` screened probes and every swarm's
-    p_g instead.
+    (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``). Where
+    the solutions form sets of two or more dimensions, ``_multistart`` polishes ``WIDE_PROBES``
+    times ``probes`` screened probes and every swarm's p_g instead.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
