@@ -18,12 +18,14 @@ from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 import numpy as np
 import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from test_node import fmt, HOPELESS_GOAL
 from trajplan_ros import paper_arm
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
-from trajplan_ros.tools.ros_client import plan_request, RosClient
+from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient
 
 
 ARM = paper_arm()
@@ -103,6 +105,36 @@ def test_calls_beyond_the_queue_and_at_shutdown_are_answered(start_node, peer) -
     assert len(node.matches(r'service call #\d+ .*: unplanned: shutting down')) >= 3
     assert 'Traceback' not in node.output
     node.stop()
+
+
+def test_answers_held_by_a_late_client_all_arrive(lone_node) -> None:
+    # 12 answers wait in the reader of a client whose executor takes none of them yet (as when
+    # the node answers every queued call at once at shutdown): with the services default QoS
+    # (KEEP_LAST 10) DDS drops the oldest two; with the clients' KEEP_ALL every one arrives
+    name = '/answers_held_by_a_late_client_all_arrive/plan_trajectory'
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    late = rclpy.create_node('late_client', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(late)
+    try:
+        client = late.create_client(GetPlan, name, qos_profile=KEEP_ALL)
+        assert client.wait_for_service(timeout_sec=LIVENESS_S)
+        # one answered call first, so that DDS has matched this client with the service
+        first = client.call_async(plan_request(PAPER_TARGET))
+        wait_until(lambda: executor.spin_once(timeout_sec=0.05) or first.done(),
+                   what='the first answer')
+        asked = goals(12, seed=11)
+        futures = [client.call_async(plan_request(g)) for g in asked]
+        wait_until(lambda: len(lone_node.matches(r'service call #\d+ .*; planned in')) == 13,
+                   what='13 calls answered')
+        wait_until(lambda: executor.spin_once(timeout_sec=0.05) or all(f.done() for f in futures),
+                   what='12 answers taken')
+        assert all(ends_at(f.result().plan, g) for f, g in zip(futures, asked))
+    finally:
+        executor.shutdown()
+        late.destroy_node()
+        rclpy.try_shutdown(context=context)
 
 
 def test_every_goal_of_a_flood_is_accounted_for(lone_node, peer) -> None:

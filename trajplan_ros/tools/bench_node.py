@@ -45,7 +45,7 @@ from rclpy.utilities import get_rmw_implementation_identifier
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.planner import plan
 from trajplan_ros.tools.node_process import describe_goal, PlannerProcess, ros_environment
-from trajplan_ros.tools.ros_client import RosClient
+from trajplan_ros.tools.ros_client import KEEP_ALL, RosClient
 
 
 __all__ = ['main']
@@ -134,7 +134,7 @@ def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
 
 def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
                    more_goals: np.ndarray) -> tuple[bool, list[str]]:
-    client = ros.node.create_client(GetPlan, 'plan_trajectory')
+    client = ros.node.create_client(GetPlan, 'plan_trajectory', qos_profile=KEEP_ALL)
     if not client.wait_for_service(timeout_sec=TIMEOUT_S):
         return False, ['no plan_trajectory service']
     single = _calls(node, ros, client, goals, idle=True)
@@ -243,7 +243,8 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
     # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
     # when a shorter history is full
     publisher = ros.node.create_publisher(Point, 'goal', len(goals))
-    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters')
+    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters',
+                                    qos_profile=KEEP_ALL)
     if not params.wait_for_service(timeout_sec=TIMEOUT_S):
         return False, ['no parameter service']
     _warm_up(node, ros, publisher, params)

@@ -21,9 +21,16 @@ import rclpy
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from trajplan_ros.tools.node_process import TIMEOUT_S, wait_until
 
-__all__ = ['RosClient', 'plan_request']
+__all__ = ['KEEP_ALL', 'RosClient', 'plan_request']
+
+#: QoS of every service client and of the goal publisher: reliable and KEEP_ALL, like the
+#: node's service and goal subscription. With the services default (KEEP_LAST, depth 10) DDS
+#: drops the oldest answers once more than 10 wait in the client's reader before its executor
+#: takes them: 20 calls answered together at the node's shutdown can then arrive as 10.
+KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 
 #: Seconds without an answer after which ``RosClient.call_idempotent`` sends its request again.
 RESEND_S = 5.0
@@ -69,7 +76,8 @@ class RosClient:
     def client(self, srv_type: Any, name: str, timeout: float = TIMEOUT_S) -> Any:
         """Return a client of service ``name``, once the service is there."""
         if name not in self._clients:
-            self._clients[name] = self.node.create_client(srv_type, name)
+            self._clients[name] = self.node.create_client(srv_type, name,
+                                                          qos_profile=KEEP_ALL)
         client = self._clients[name]
         if not client.wait_for_service(timeout_sec=timeout):
             raise TimeoutError(f'no service {name} within {timeout:g} s')

@@ -39,19 +39,17 @@ from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.srv import GetParameters
 from rclpy.duration import Duration
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning import plan
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.node_process import (describe_goal, PlannerProcess, ros_environment,
                                              TIMEOUT_S, wait_until)
-from trajplan_ros.tools.ros_client import plan_request, RosClient
+from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient
 
 
 __all__ = ['main']
 
-KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 HOPELESS_GOAL = (0.05, -0.05, -0.25)        # inside the reach sphere, never reached
 Result = tuple[bool, list[str]]
 
