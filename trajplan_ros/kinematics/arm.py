@@ -199,7 +199,7 @@ class ArmModel:
     base_link: str
     tip_link: str
     _kinds: tuple[int, ...] = field(init=False, repr=False, compare=False)
-    _tail: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    _tail: np.ndarray = field(init=False, repr=False, compare=False)
     _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
 
@@ -256,8 +256,7 @@ class ArmModel:
         put(self, 'base_link', str(base_link))
         put(self, 'tip_link', str(tip_link))
         put(self, '_kinds', tuple(_kind(r) for r in self.rotations))
-        tool = np.stack((self.tool_point, self.tool_axis))
-        put(self, '_tail', (tool[:, 0] + 1j * tool[:, 1], tool[:, 2].copy()))
+        put(self, '_tail', np.stack((self.tool_point, self.tool_axis)))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
         if not self.reach < 1e6:
             raise InvalidArmModel(f'the links add up to {self.reach:.3g} m: not an arm')
@@ -397,66 +396,61 @@ class ArmModel:
         q = np.asarray(q, dtype=float)
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
 
-    def held_tail(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def held_tail(self, q: np.ndarray) -> np.ndarray:
         """
         Return the tool point and axis in frame ``planned``, the held joints at q (n_joints,).
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
         q = np.asarray(q, dtype=float)[None, :]
-        w, z = self._chain(q, self.n_joints, self.planned, self._tail, jacobian=False)
-        return w[:, 0], z[:, 0]
+        return self._chain(q, self.n_joints, self.planned, self._tail, jacobian=False)[:, 0]
 
-    def tool(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
+    def tool(self, q: np.ndarray, tail: np.ndarray | None = None
              ) -> tuple[np.ndarray, np.ndarray]:
         """
         Return tool position (N, 3) and tool axis (N, 3) for configurations q (N, n_joints).
 
         With ``tail`` (from ``held_tail``), q holds the planned joints only (N, planned).
         """
-        w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=False)
-        vec = np.stack((w.real, w.imag, z), axis=-1)               # (2, N, 3)
+        vec = self._walk(np.asarray(q, dtype=float), tail, jacobian=False)     # (2, N, 3)
         return vec[0], vec[1]
 
-    def tool_jacobian(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None = None
-                      ) -> ToolJacobian:
+    def tool_jacobian(self, q: np.ndarray, tail: np.ndarray | None = None) -> ToolJacobian:
         """
         Return tool position and axis, their derivatives and the joint axes (``ToolJacobian``).
 
         ``tail`` as for ``tool``.
         """
-        w, z = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
-        vec = np.stack((w.real, w.imag, z))                         # (3, 2 + 3 planned, N)
+        vec = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
+        vec = np.ascontiguousarray(np.moveaxis(vec, 2, 0))         # (3, 2 + 3 planned, N)
         return ToolJacobian(vec[:, :2], vec[:, 2:].reshape(3, self.planned, 3, -1))
 
-    def _walk(self, q: np.ndarray, tail: tuple[np.ndarray, np.ndarray] | None,
-              jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _walk(self, q: np.ndarray, tail: np.ndarray | None, jacobian: bool) -> np.ndarray:
         if tail is None:
-            w, z = self._chain(q, self.n_joints, 0, self._tail, jacobian)
+            vec = self._chain(q, self.n_joints, 0, self._tail, jacobian)
         else:
-            w, z = self._chain(q, self.planned, 0, tail, jacobian)
+            vec = self._chain(q, self.planned, 0, tail, jacobian)
         if self._moved_base:
-            w, z = _turn(self.base[:3, :3], w, z)
-            w[0] += complex(*self.base[:2, 3])
-            z[0] += self.base[2, 3]
-        return w, z
+            vec = _rotated(self.base[:3, :3], vec)
+            vec[0] += self.base[:3, 3]
+        return vec
 
-    def _chain(self, q: np.ndarray, top: int, bottom: int, tail: tuple[np.ndarray, np.ndarray],
-               jacobian: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _chain(self, q: np.ndarray, top: int, bottom: int, tail: np.ndarray,
+               jacobian: bool) -> np.ndarray:
         """
         Walk joints top-1 .. bottom from frame ``top`` towards the base (B is left to _walk).
 
         This is every optimiser's hot path.
 
-        ``tail`` is the tool point and axis in frame ``top`` as (w, z) with w = x + i y
-        (complex) and z, each of length 2. Returns w and z, each (rows, N): row 0 is the tool
-        point, row 1 the tool axis and, with ``jacobian``, rows 2 + 3i, 3 + 3i and 4 + 3i are
-        d(point)/dq_i, d(axis)/dq_i and sign_i times the axis of joint i, for each planned
-        joint i. Per joint it applies v <- Rz(theta) (rotation v + translation) to every row at
-        once (the translation only to the point), the rotation about z as one complex product,
-        a DH link's rotation about x on y and z only, so the cost is a few array operations per
-        joint whatever N is. The rows for joint i are born in its own frame as z x v (i v in
-        complex form) and z, then rotated with everything else.
+        ``tail`` (2, 3) is the tool point and axis in frame ``top``. Returns vectors
+        (rows, N, 3): row 0 is the tool point, row 1 the tool axis and, with ``jacobian``, rows
+        2 + 3i, 3 + 3i and 4 + 3i are d(point)/dq_i, d(axis)/dq_i and sign_i times the axis of
+        joint i, for each planned joint i. Per joint it applies v <- Rz(theta) (rotation v +
+        translation) to every row at once (the translation only to the point): the rotation
+        about z as one complex product on a complex view of the x, y coordinates, a DH link's
+        rotation about x on y and z only, any other as one matrix product, so the cost is a few
+        array operations per joint whatever N is. The rows for joint i are born in its own
+        frame as z x v (i v in complex form) and z, then rotated with everything else.
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
         theta = (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top]).T
@@ -464,27 +458,24 @@ class ArmModel:
         np.cos(theta, out=rot.real)
         np.sin(theta, out=rot.imag)
         rows = 2 + 3 * self.planned if jacobian else 2
-        w = np.zeros((rows, q.shape[0]), dtype=complex)
-        z = np.zeros((rows, q.shape[0]))
-        w[:2] = tail[0][:, None]
-        z[:2] = tail[1][:, None]
+        vec = np.zeros((rows, q.shape[0], 3))
+        vec[:2] = tail[:, None, :]
         for i in range(top - 1, bottom - 1, -1):
             kind, r = self._kinds[i], self.rotations[i]
             if kind == _ABOUT_X:
                 ca, sa = r[1, 1], r[2, 1]
-                y = w.imag.copy()
-                w.imag = ca * y - sa * z
-                z = sa * y + ca * z
+                y, z = vec[..., 1].copy(), vec[..., 2].copy()
+                vec[..., 1] = ca * y - sa * z
+                vec[..., 2] = sa * y + ca * z
             elif kind == _GENERAL:
-                w, z = _turn(r, w, z)
-            tx, ty, tz = self.translations[i]
-            w[0] += complex(tx, ty) if ty else tx
-            z[0] += tz
-            w *= rot[i - bottom]
+                vec = _rotated(r, vec)
+            vec[0] += self.translations[i]
+            xy = vec[..., :2].view(complex)[..., 0]                  # x + i y, a view
+            xy *= rot[i - bottom]
             if jacobian and i < self.planned:
-                w[2 + 3 * i: 4 + 3 * i] = (1j * self.sign[i]) * w[:2]
-                z[4 + 3 * i] = self.sign[i]
-        return w, z
+                xy[2 + 3 * i: 4 + 3 * i] = (1j * self.sign[i]) * xy[:2]
+                vec[4 + 3 * i, :, 2] = self.sign[i]
+        return vec
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """
@@ -505,10 +496,6 @@ class ArmModel:
         return out
 
 
-def _turn(r: np.ndarray, w: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Apply the rotation r (3, 3) to vectors stored as (w = x + i y, z), each (rows, N)."""
-    x, y = w.real, w.imag
-    out = np.empty_like(w)
-    out.real = r[0, 0] * x + r[0, 1] * y + r[0, 2] * z
-    out.imag = r[1, 0] * x + r[1, 1] * y + r[1, 2] * z
-    return out, r[2, 0] * x + r[2, 1] * y + r[2, 2] * z
+def _rotated(r: np.ndarray, vec: np.ndarray) -> np.ndarray:
+    """Return vectors (..., 3) turned by the rotation r (3, 3), as one matrix product."""
+    return (vec.reshape(-1, 3) @ r.T).reshape(vec.shape)
