@@ -137,18 +137,50 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
 
     The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
-    Its KKT system in (z, t, multipliers y), with the Hessian of the Lagrangian sum_p y_p H_p
-    taken at least-squares multipliers (min |g^T y| with the ties' y summing to 1); unused
-    slots (``idle``, (C, p, p)) get y = 0. A set that ties a joint it also holds at a limit has
-    no step (z = 0).
+    A set of k + 1 pieces (a vertex: no unused slot in ``idle``, (C, p, p)) fixes z and t by
+    those k + 1 equations alone (``_vertex_steps``); a smaller one takes the Hessian of the
+    Lagrangian into account (``_kkt_steps``). A set that ties a joint it also holds at a limit
+    has no step (z = 0).
     """
-    k_count, k = grad.shape[0], grad.shape[2]
-    c, p = pieces.shape
     g = grad[:, pieces]                                                     # (K, C, p, k)
-    gram = grad @ np.swapaxes(grad, 1, 2)                                   # (K, r + 3, r + 3)
     held = joint[:, pieces]                                                 # (K, C, p)
     clash = np.any((np.where(ties > 0, held, -2)[..., :, None]
                     == np.where((ties == 0) & (held >= 0), held, -3)[..., None, :]), axis=(2, 3))
+    right = np.where(clash[..., None], 0.0, rhs[:, pieces])
+    vertex = ~idle.any(axis=(1, 2))
+    z = np.empty(g.shape[:2] + g.shape[3:])
+    z[:, vertex] = _vertex_steps(g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
+    z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
+                               idle[~vertex], right[:, ~vertex], clash[:, ~vertex])
+    return np.where(np.isfinite(z), z, 0.0)
+
+
+def _vertex_steps(g: np.ndarray, ties: np.ndarray, right: np.ndarray, clash: np.ndarray
+                  ) -> np.ndarray:
+    """
+    Return z (K, V, k) of vertex sets: the solution of g z - ties t = right (k + 1 equations).
+
+    g (K, V, k + 1, k), ties (V, k + 1), right (K, V, k + 1); ``clash`` sets get z = 0.
+    """
+    n = g.shape[-1] + 1
+    system = np.concatenate((g, np.broadcast_to(-ties[:, :, None], g.shape[:-1] + (1,))), axis=3)
+    system[clash] = np.eye(n)
+    return _solve(system + 1e-13 * np.eye(n), right[..., None])[..., :-1, 0]
+
+
+def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.ndarray,
+               ties: np.ndarray, idle: np.ndarray, right: np.ndarray, clash: np.ndarray
+               ) -> np.ndarray:
+    """
+    Return z (K, C, k) of the sets ``pieces`` (C, p) with unused slots, by their KKT systems.
+
+    The KKT system in (z, t, multipliers y), with the Hessian of the Lagrangian sum_p y_p H_p
+    taken at least-squares multipliers (min |g^T y| with the ties' y summing to 1); unused
+    slots (``idle``, (C, p, p)) get y = 0. ``clash`` sets get z = 0.
+    """
+    k_count, k = grad.shape[0], grad.shape[2]
+    c, p = pieces.shape
+    gram = grad @ np.swapaxes(grad, 1, 2)                                   # (K, r + 3, r + 3)
     ls = np.zeros((k_count, c, p + 1, p + 1))
     ls[..., :p, :p] = gram[:, pieces[:, :, None], pieces[:, None, :]] + idle
     ls[..., p, :p] = ls[..., :p, p] = ties
@@ -163,12 +195,11 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     kkt[..., k + 1:, :k] = g
     kkt[..., k, k + 1:] = kkt[..., k + 1:, k] = -ties
     kkt[..., k + 1:, k + 1:] = idle
-    right = np.zeros((k_count, c, n))
-    right[..., k] = -1.0
-    right[..., k + 1:] = rhs[:, pieces]
-    kkt[clash], right[clash] = np.eye(n), 0.0
-    z = _solve(kkt + 1e-13 * np.eye(n), right[..., None])[..., :k, 0]
-    return np.where(np.isfinite(z), z, 0.0)
+    kkt[clash] = np.eye(n)
+    rhs = np.zeros((k_count, c, n))
+    rhs[..., k] = np.where(clash, 0.0, -1.0)
+    rhs[..., k + 1:] = right
+    return _solve(kkt + 1e-13 * np.eye(n), rhs[..., None])[..., :k, 0]
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
