@@ -190,7 +190,10 @@ def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.nda
     y = _solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
     n = k + 1 + p
     kkt = np.zeros((k_count, c, n, n))
-    kkt[..., :k, :k] = np.einsum('kabcp,kcp->kcab', hess[..., pieces], y[..., :p, 0])
+    weights = np.zeros((k_count, c, hess.shape[3]))        # y by piece (unused slots: y = 0)
+    weights[:, np.arange(c)[:, None], pieces] = y[..., :p, 0]
+    kkt[..., :k, :k] = (weights @ hess.reshape(k_count, k * k, -1).swapaxes(1, 2)).reshape(
+        k_count, c, k, k)
     kkt[..., :k, k + 1:] = np.swapaxes(g, 2, 3)
     kkt[..., k + 1:, :k] = g
     kkt[..., k, k + 1:] = kkt[..., k + 1:, k] = -ties
@@ -235,7 +238,8 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
     z = _within(z, limit[:, None])
     linear = z @ null
-    step = linear + np.einsum('kca,kabm,kcb->kcm', z, quad, z)
+    pairs = (z[..., :, None] * z[..., None, :]).reshape(k_count, -1, k * k)
+    step = linear + pairs @ quad.reshape(k_count, k * k, m)
     lo, hi = gap_lo[:, None, :], gap_hi[:, None, :]
     usable = np.all((linear >= lo - 1e-12) & (linear <= hi + 1e-12), axis=2)
     worst = np.max(np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale, axis=2)
