@@ -321,11 +321,12 @@ class Linearisation:
     projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its row count
     (where J loses rank, that basis misses a null direction). The pairs off the diagonal of
     ``quad`` serve the SQP step of two or more null directions (``_active_set_minimax``).
-    ``curvature=False`` leaves the curvature out (zero), for speed.
+    ``newton_only`` leaves the null space and the curvature out (both empty): all a Newton
+    step needs, for speed.
     """
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float,
-                 curvature: bool = True) -> None:
+                 newton_only: bool = False) -> None:
         d = obj.tool_jacobian(x)
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
@@ -342,7 +343,7 @@ class Linearisation:
         damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
         inverse = _inverse(gram + damp * _eye(gram.shape[1]))
         self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
-        free = max(dim - rows, 0)
+        free = 0 if newton_only else max(dim - rows, 0)
         if free == 0:
             self.null = np.empty((k, 0, dim))
         elif free == 1:
@@ -353,9 +354,9 @@ class Linearisation:
         else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.quad = np.zeros((k, free, free, dim))
-        for j in range(free if curvature else 0):
+        for j in range(free):
             self.quad[:, j, j] = self._second(obj, d, self.null[:, j])
-        for a, b in itertools.combinations(range(free if curvature else 0), 2):
+        for a, b in itertools.combinations(range(free), 2):
             both = self._second(obj, d, self.null[:, a] + self.null[:, b])
             self.quad[:, a, b] = self.quad[:, b, a] = (
                 0.5 * both - 0.5 * (self.quad[:, a, a] + self.quad[:, b, b]))
@@ -510,10 +511,10 @@ def settle(obj: Objective, x: np.ndarray, below: float, steps: int = 3) -> np.nd
     near = (error > below) & (error < 1e-2 * obj.arm.reach)
     if not near.any():
         return x
-    here = Linearisation(obj, x[near], 1.0, curvature=False)
+    here = Linearisation(obj, x[near], 1.0, newton_only=True)
     for _ in range(steps):
         trial = np.clip(x[near] + here.newton(here.c), obj.lower, obj.upper)
-        there = Linearisation(obj, trial, 1.0, curvature=False)
+        there = Linearisation(obj, trial, 1.0, newton_only=True)
         better = there.error < here.error
         x[np.flatnonzero(near)[better]] = trial[better]
         here.keep(there, better)

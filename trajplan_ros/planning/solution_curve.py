@@ -73,7 +73,7 @@ def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     carry on converging in ``follow``, which corrects every step.
     """
     for _ in range(steps):
-        here = Linearisation(curve, x, 1.0, curvature=False)
+        here = Linearisation(curve, x, 1.0, newton_only=True)
         x = _wrap_into(curve, x + here.newton(here.c))
     return x
 
