@@ -15,6 +15,23 @@ def random_arm(rng: np.random.Generator, n: int) -> ArmModel:
         offset=rng.uniform(-1, 1, n), lower=-np.full(n, 2.5), upper=np.full(n, 2.5))
 
 
+def rotation(rng: np.random.Generator) -> np.ndarray:
+    """Return a random rotation matrix (determinant +1)."""
+    q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    return q * np.linalg.det(q)
+
+
+def general_arm(rng: np.random.Generator, n: int) -> ArmModel:
+    """Return a chain as a URDF gives it: any link rotations, a moved base, an offset tool."""
+    base = np.eye(4)
+    base[:3, :3], base[:3, 3] = rotation(rng), rng.uniform(-0.1, 0.1, 3)
+    return ArmModel([rotation(rng) for _ in range(n)], rng.uniform(-0.15, 0.15, (n, 3)),
+                    base=base, tool_point=rng.uniform(-0.05, 0.05, 3),
+                    tool_axis=rng.normal(size=3), sign=rng.choice([-1, 1], n),
+                    offset=rng.uniform(-1, 1, n), lower=-np.full(n, 2.5), upper=np.full(n, 2.5),
+                    planned=n - 1)
+
+
 def test_paper_arm_upright_pose_is_the_papers_initial_position():
     p, u = paper_arm().tool(np.zeros((1, 5)))
     np.testing.assert_allclose(p[0], [0.037, 0.0, 0.337], atol=1e-15)
@@ -27,25 +44,40 @@ def test_table5_iepso_row_lands_on_the_papers_target():
     assert np.linalg.norm(p[0] - PAPER_TARGET) == pytest.approx(0.805e-3, abs=0.01e-3)
 
 
-@pytest.mark.parametrize('n', [2, 5, 7])
+@pytest.mark.parametrize('n', [2, 5, 7, 6])
 def test_chain_walk_matches_homogeneous_transforms(n):
-    rng = np.random.default_rng(n)
-    arm = paper_arm() if n == 5 else random_arm(rng, n)
-    q = rng.uniform(arm.lower, arm.upper, (50, arm.n_joints))
+    _, arm, q = arm_and_configurations(n, n)
     p, u = arm.tool(q)
     frames = arm.frames(q)
     np.testing.assert_allclose(p, frames[:, -1, :3, 3], atol=1e-14)
-    np.testing.assert_allclose(u, frames[:, -1, :3, 2], atol=1e-14)
+    np.testing.assert_allclose(u, frames[:, -1, :3, :3] @ arm.tool_axis, atol=1e-14)
 
 
 def arm_and_configurations(n: int, seed: int) -> tuple[np.random.Generator, ArmModel, np.ndarray]:
-    """Return the paper's arm (n = 5) or a random n-joint arm, and 20 in-limit configurations."""
+    """
+    Return an arm and 20 in-limit configurations.
+
+    The paper's arm for n = 5, a general chain (``general_arm``) for n = 6, else a random DH arm.
+    """
     rng = np.random.default_rng(seed)
-    arm = paper_arm() if n == 5 else random_arm(rng, n)
+    arm = {5: paper_arm, 6: lambda: general_arm(rng, 6)}.get(n, lambda: random_arm(rng, n))()
     return rng, arm, rng.uniform(arm.lower, arm.upper, (20, arm.n_joints))
 
 
-@pytest.mark.parametrize('n', [3, 5, 7])
+def test_a_held_tail_walks_the_planned_joints_only():
+    _, arm, q = arm_and_configurations(6, 1)
+    for start in q[:3]:
+        here = np.concatenate((q[:, : arm.planned], np.broadcast_to(start[arm.planned:], (20, 1))),
+                              axis=1)
+        tail = arm.held_tail(start)
+        np.testing.assert_allclose(arm.tool(q[:, : arm.planned], tail=tail), arm.tool(here),
+                                   atol=1e-15)
+        d, full = arm.tool_jacobian(q[:, : arm.planned], tail=tail), arm.tool_jacobian(here)
+        np.testing.assert_allclose(d.jp, full.jp, atol=1e-15)
+        np.testing.assert_allclose(d.ju, full.ju, atol=1e-15)
+
+
+@pytest.mark.parametrize('n', [3, 5, 7, 6])
 def test_jacobian_matches_finite_differences(n):
     _, arm, q = arm_and_configurations(n, 10 + n)
     d = arm.tool_jacobian(q)
@@ -61,7 +93,7 @@ def test_jacobian_matches_finite_differences(n):
         np.testing.assert_allclose(ju[:, :, i], (up - um) / (2 * h), atol=1e-8)
 
 
-@pytest.mark.parametrize('n', [3, 5, 7])
+@pytest.mark.parametrize('n', [3, 5, 7, 6])
 def test_curvature_matches_finite_differences(n):
     rng, arm, q = arm_and_configurations(n, 20 + n)
     direction = np.zeros_like(q)

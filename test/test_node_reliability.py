@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from test_node import fmt, HOPELESS_GOAL
 from trajplan_ros import paper_arm
@@ -114,10 +113,11 @@ def test_answers_held_by_a_late_client_all_arrive(lone_node) -> None:
     name = '/answers_held_by_a_late_client_all_arrive/plan_trajectory'
     context = rclpy.Context()
     rclpy.init(context=context)
-    late = rclpy.create_node('late_client', context=context)
     executor = SingleThreadedExecutor(context=context)
-    executor.add_node(late)
+    late = None
     try:
+        late = rclpy.create_node('late_client', context=context)
+        executor.add_node(late)
         client = late.create_client(GetPlan, name, qos_profile=KEEP_ALL)
         assert client.wait_for_service(timeout_sec=LIVENESS_S)
         # one answered call first, so that DDS has matched this client with the service
@@ -133,7 +133,8 @@ def test_answers_held_by_a_late_client_all_arrive(lone_node) -> None:
         assert all(ends_at(f.result().plan, g) for f, g in zip(futures, asked))
     finally:
         executor.shutdown()
-        late.destroy_node()
+        if late is not None:
+            late.destroy_node()
         rclpy.try_shutdown(context=context)
 
 
@@ -142,8 +143,7 @@ def test_every_goal_of_a_flood_is_accounted_for(lone_node, peer) -> None:
     sent = goals(60, seed=11)
     diagnostics: list[DiagnosticArray] = []
     peer.node.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
-    qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
-    publisher = peer.node.create_publisher(Point, f'{ns}/goal', qos)
+    publisher = peer.node.create_publisher(Point, f'{ns}/goal', KEEP_ALL)
     peer.publisher(Point, f'{ns}/goal')                  # waits until the node subscribes
     for g in sent:
         publisher.publish(Point(x=g[0], y=g[1], z=g[2]))

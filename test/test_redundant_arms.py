@@ -10,7 +10,8 @@ from scipy.optimize import linprog
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import plan
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import _active_set_minimax, _LARGEST, polish
+from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
+                                          _pieces, _sqp_steps, _WALLS, polish)
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -45,6 +46,54 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
             compared += 1
             assert ours == pytest.approx(best.fun, rel=1e-9, abs=1e-12)
     assert compared >= 10
+
+
+def kkt_step(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, used: list[int],
+             ties: list[bool]) -> np.ndarray:
+    """
+    Return the SQP step z of one active set, one candidate, by its KKT system (the reference).
+
+    min t subject to g_p z - t = rhs_p (ties) and g_p z = rhs_p (limits), p in ``used``, with
+    the Hessian sum_p y_p H_p at the least-squares multipliers y (min |sum_p y_p g_p| with the
+    ties' y summing to 1).
+    """
+    g, tie = grad[used], np.array(ties, dtype=float)
+    k, p = g.shape[1], len(used)
+    # multipliers: min |g^T y|^2 subject to tie . y = 1
+    ls = np.block([[g @ g.T, tie[:, None]], [tie[None, :], np.zeros((1, 1))]])
+    y = np.linalg.lstsq(ls, np.eye(p + 1)[p], rcond=None)[0][:p]
+    kkt = np.block([[np.einsum('abp,p->ab', hess[:, :, used], y), np.zeros((k, 1)), g.T],
+                    [np.zeros((1, k + 1)), -tie[None, :]],
+                    [g, -tie[:, None], np.zeros((p, p))]])
+    right = np.concatenate((np.zeros(k), [-1.0], rhs[used]))
+    return np.linalg.solve(kkt, right)[:k]
+
+
+@pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
+def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> None:
+    # a curved model of the solutions: the batched steps (a vertex set's k + 1 equations, the
+    # other sets' KKT systems) against each set's KKT system solved on its own
+    rng = np.random.default_rng(10 + k)
+    r = min(m, k + _LARGEST)
+    pieces, ties = _active_sets(r, k)
+    idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
+    null = np.stack([np.linalg.qr(rng.normal(size=(m, k)))[0].T for _ in range(6)])
+    quad = rng.normal(0.0, 0.3, (6, k, k, m))
+    quad = 0.5 * (quad + np.swapaxes(quad, 1, 2))
+    b = rng.uniform(-3.0, 3.0, (6, m))
+    grad, hess, rhs, joint = _pieces(b, null, quad, rng.uniform(1.0, 2.0, m),
+                                     rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m)),
+                                     r)
+    z = _sqp_steps(grad, hess, rhs, joint, pieces, ties, idle)
+    for i in range(6):
+        for c, (set_pieces, set_ties) in enumerate(zip(pieces, ties)):
+            used = [int(p) for p in set_pieces if p != r + _WALLS]
+            held = joint[i, used]
+            if set(held[set_ties[: len(used)] > 0]) & set(held[set_ties[: len(used)] == 0]):
+                np.testing.assert_array_equal(z[i, c], 0.0)   # ties a joint held at a limit
+                continue
+            want = kkt_step(grad[i], hess[i], rhs[i], used, list(set_ties[: len(used)] > 0))
+            np.testing.assert_allclose(z[i, c], want, rtol=1e-7, atol=1e-9)
 
 
 @pytest.mark.parametrize('name', ['so101', 'ur5', 'panda', 'xarm7'])
