@@ -81,9 +81,8 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     quad = rng.normal(0.0, 0.3, (6, k, k, m))
     quad = 0.5 * (quad + np.swapaxes(quad, 1, 2))
     b = rng.uniform(-3.0, 3.0, (6, m))
-    grad, hess, rhs, joint = _pieces(b, null, quad, rng.uniform(1.0, 2.0, m),
-                                     rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m)),
-                                     r)
+    gap_lo, gap_hi = rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m))
+    grad, hess, rhs, joint = _pieces(b, null, quad, rng.uniform(1.0, 2.0, m), gap_lo, gap_hi, r)
     z = _sqp_steps(grad, hess, rhs, joint, pieces, ties, idle)
     for i in range(6):
         for c, (set_pieces, set_ties) in enumerate(zip(pieces, ties)):
