@@ -19,7 +19,7 @@ setup(
     ],
     python_requires='>=3.10',
     # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities
-    install_requires=['setuptools', 'numpy', 'yourdfpy', 'defusedxml'],
+    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
         'ros': ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp'],

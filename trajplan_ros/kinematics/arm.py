@@ -398,7 +398,9 @@ class ArmModel:
 
     def held_tail(self, q: np.ndarray) -> np.ndarray:
         """
-        Return the tool point and axis in frame ``planned``, the held joints at q (n_joints,).
+        Return the tool point and axis (2, 3) in frame ``planned``, the held joints at q.
+
+        q holds every joint's angle (n_joints,).
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
@@ -464,9 +466,9 @@ class ArmModel:
             kind, r = self._kinds[i], self.rotations[i]
             if kind == _ABOUT_X:
                 ca, sa = r[1, 1], r[2, 1]
-                y, z = vec[..., 1].copy(), vec[..., 2].copy()
-                vec[..., 1] = ca * y - sa * z
-                vec[..., 2] = sa * y + ca * z
+                y = vec[..., 1].copy()
+                vec[..., 1] = ca * y - sa * vec[..., 2]
+                vec[..., 2] = sa * y + ca * vec[..., 2]
             elif kind == _GENERAL:
                 vec = _rotated(r, vec)
             vec[0] += self.translations[i]

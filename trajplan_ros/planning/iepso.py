@@ -37,13 +37,13 @@ Additions of ours, documented in the README, each on by default because it measu
 * swarm-level last-elimination (``restart``, ``_restart``): after a polish round, swarms whose
   best is worse than the overall best by more than ``tol`` are drawn anew;
 * the run stops after a polish round (``_Stopping``) when at least ``agreement`` (2; 1 where
-  the solutions form sets of two or more dimensions, ``WIDE_AGREEMENT``) of the refined
-  candidates have settled on the goal (error at most ``SETTLED``, 1e-14 m) with the
-  best motion time (independent starting points agreeing), or when the best F has improved by
-  less than ``tol`` for ``patience_rounds`` rounds (three times as many while the goal is not
-  reached; the paper's convergence precision), or after ``max_iter`` iterations. F itself is
-  not compared for agreement: eq. (17) changes it by 0.024 per picometre of error, far below
-  any meaningful difference;
+  the solutions form sets of two or more dimensions and ``curve_search`` is on,
+  ``WIDE_AGREEMENT``) of the refined candidates have settled on the goal (error at most
+  ``SETTLED``, 1e-14 m) with the best motion time (independent starting points agreeing),
+  or when the best F has improved by less than ``tol`` for ``patience_rounds`` rounds (three
+  times as many while the goal is not reached; the paper's convergence precision), or after
+  ``max_iter`` iterations. F itself is not compared for agreement: eq. (17) changes it by
+  0.024 per picometre of error, far below any meaningful difference;
 * a curve search (``_curve_search``) once the run stops, where the solutions form curves (one
   free direction: free mode with four planned joints, radial mode with six; radial mode with
   four through the curves of the position constraint alone): ``solution_curve`` follows the
@@ -375,7 +375,7 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
 
 def _wide(obj: Objective) -> bool:
     """Return whether the solutions form sets of two or more dimensions (``_multistart``)."""
-    return curve_constraint(obj) is None and obj.arm.planned > (5 if obj.radial else 3)
+    return obj.arm.planned > (5 if obj.radial else 3) and curve_constraint(obj) is None
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
@@ -517,9 +517,9 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
           seed: int | np.random.Generator | None = None, swarms: int | None = None,
           polish: bool = True, polish_period: int = 5, polish_count: int | None = None,
           polish_steps: int | None = None, agreement: int | None = None,
-          patience_rounds: int = 4,
-          restart: bool = True, curve_search: int = 20, elimination: float = 0.1,
-          elimination_period: int = 5, inertia: tuple[float, float] = (0.9, 0.4),
+          patience_rounds: int = 4, restart: bool = True, curve_search: int = 20,
+          elimination: float = 0.1, elimination_period: int = 5,
+          inertia: tuple[float, float] = (0.9, 0.4),
           c1: float = 2.0, c2: float = 2.0, c3: tuple[float, float] = (2.0, 0.0),
           max_velocity: float = 0.2, interrupt: Interrupt | None = None) -> OptimizeResult:
     """
@@ -528,7 +528,9 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``). Without ``polish`` this is the paper's algorithm alone, stopped by
+    ``RADIAL_DEFAULTS``), ``agreement`` to ``WIDE_AGREEMENT`` where the multi-start follows
+    (sets of two or more dimensions, ``curve_search`` on) and to 2 elsewhere. Without
+    ``polish`` this is the paper's algorithm alone, stopped by
     ``History.stalled``. ``interrupt`` is asked after every iteration the stopping rule has not
     ended; its reason ends the run with the best answer so far (see the module docstring).
     """

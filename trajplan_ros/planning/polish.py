@@ -27,7 +27,8 @@ line searches are replaced by one step of sequential quadratic programming on th
 x(z) = x + z N + z^T Q z of the solutions (Q from the second derivatives along every pair of
 null directions): each candidate active set (the joints tying with the largest displacement,
 chosen among the k + 2 largest, with none, one or both of the two nearest joint limits) gives
-a KKT solve; the best on the model wins (``_active_set_minimax``). Near a minimum that is
+a step: a vertex set (k + 1 pieces) by its k + 1 equations, a smaller one by its KKT system;
+the best on the model wins (``_active_set_minimax``). Near a minimum that is
 Newton's method on the right active set: it converges in a few steps where a coordinate
 descent along the null directions stalls on the ridge where joints tie. Ties are then broken
 only by the merit's travel term and by ``iepso._fastest`` among the candidates.
@@ -190,8 +191,9 @@ def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.nda
     y = _solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
     n = k + 1 + p
     kkt = np.zeros((k_count, c, n, n))
-    weights = np.zeros((k_count, c, hess.shape[3]))        # y by piece (unused slots: y = 0)
+    weights = np.zeros((k_count, c, hess.shape[3]))        # y by piece
     weights[:, np.arange(c)[:, None], pieces] = y[..., :p, 0]
+    weights[..., -1] = 0.0                                  # the unused slot (its H is 0)
     kkt[..., :k, :k] = (weights @ hess.reshape(k_count, k * k, -1).swapaxes(1, 2)).reshape(
         k_count, c, k, k)
     kkt[..., :k, k + 1:] = np.swapaxes(g, 2, 3)
@@ -199,10 +201,10 @@ def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.nda
     kkt[..., k, k + 1:] = kkt[..., k + 1:, k] = -ties
     kkt[..., k + 1:, k + 1:] = idle
     kkt[clash] = np.eye(n)
-    rhs = np.zeros((k_count, c, n))
-    rhs[..., k] = np.where(clash, 0.0, -1.0)
-    rhs[..., k + 1:] = right
-    return _solve(kkt + 1e-13 * np.eye(n), rhs[..., None])[..., :k, 0]
+    full = np.zeros((k_count, c, n))
+    full[..., k] = np.where(clash, 0.0, -1.0)
+    full[..., k + 1:] = right
+    return _solve(kkt + 1e-13 * np.eye(n), full[..., None])[..., :k, 0]
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:

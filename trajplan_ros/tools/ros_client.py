@@ -26,10 +26,10 @@ from trajplan_ros.tools.node_process import TIMEOUT_S, wait_until
 
 __all__ = ['KEEP_ALL', 'RosClient', 'plan_request']
 
-#: QoS of every service client and of the goal publisher: reliable and KEEP_ALL, like the
-#: node's service and goal subscription. With the services default (KEEP_LAST, depth 10) DDS
-#: drops the oldest answers once more than 10 wait in the client's reader before its executor
-#: takes them: 20 calls answered together at the node's shutdown can then arrive as 10.
+#: QoS of every service client: reliable and KEEP_ALL, like the node's service. With the
+#: services default (KEEP_LAST, depth 10) DDS drops the oldest answers once more than 10 wait
+#: in the client's reader before its executor takes them: 20 calls answered together at the
+#: node's shutdown can then arrive as 10.
 KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 
 #: Seconds without an answer after which ``RosClient.call_idempotent`` sends its request again.
