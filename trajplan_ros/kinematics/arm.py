@@ -145,6 +145,13 @@ def _rotations(name: str, values: Sequence, n: int) -> np.ndarray:
     return arr
 
 
+#: How far (m per metre of reach, and rad for the axis) a trailing joint's axis may miss the
+#: tool point (and the tool axis) for the joint to count as idle: turning it moves them by at
+#: most twice that, far below any tolerance, and holding it leaves every pose of the planned
+#: joints reachable. Vendor files give rounded angles: the UR5's tool0 axis misses the last
+#: joint's axis by 5e-12 rad.
+_IDLE = 1e-9
+
 #: How the walk applies a link rotation: skip it, the 2x2 rotation of y and z (a rotation about
 #: x, as in every DH link), or the full 3x3 product.
 _IDENTITY, _ABOUT_X, _GENERAL = 0, 1, 2
@@ -357,9 +364,9 @@ class ArmModel:
         for i in range(self.n_joints - 1, 0, -1):
             point = self.rotations[i] @ point + self.translations[i]    # in joint i's frame
             direction = self.rotations[i] @ direction
-            still = np.hypot(point[0], point[1]) <= 1e-12 * max(1.0, self.reach)
+            still = np.hypot(point[0], point[1]) <= _IDLE * max(1.0, self.reach)
             if axis:
-                still &= np.hypot(direction[0], direction[1]) <= 1e-12
+                still &= np.hypot(direction[0], direction[1]) <= _IDLE
             if not still:
                 break
             planned = min(planned, i)

@@ -37,13 +37,13 @@ Additions of ours, documented in the README, each on by default because it measu
 * swarm-level last-elimination (``restart``, ``_restart``): after a polish round, swarms whose
   best is worse than the overall best by more than ``tol`` are drawn anew;
 * the run stops after a polish round (``_Stopping``) when at least ``agreement`` (2; 1 where
-  the solutions form sets of two or more dimensions and ``curve_search`` is on,
-  ``WIDE_AGREEMENT``) of the refined candidates have settled on the goal (error at most
-  ``SETTLED``, 1e-14 m) with the best motion time (independent starting points agreeing),
-  or when the best F has improved by less than ``tol`` for ``patience_rounds`` rounds (three
-  times as many while the goal is not reached; the paper's convergence precision), or after
-  ``max_iter`` iterations. F itself is not compared for agreement: eq. (17) changes it by
-  0.024 per picometre of error, far below any meaningful difference;
+  the multi-start searches the solutions after the swarm phase, ``MULTISTART_AGREEMENT``) of
+  the refined candidates have settled on the goal (error at most ``SETTLED``, 1e-14 m) with
+  the best motion time (independent starting points agreeing), or when the best F has
+  improved by less than ``tol`` for ``patience_rounds`` rounds (three times as many while the
+  goal is not reached; the paper's convergence precision), or after ``max_iter`` iterations.
+  F itself is not compared for agreement: eq. (17) changes it by 0.024 per picometre of
+  error, far below any meaningful difference;
 * a curve search (``_curve_search``) once the run stops, where the solutions form curves (one
   free direction: free mode with four planned joints, radial mode with six; radial mode with
   four through the curves of the position constraint alone): ``solution_curve`` follows the
@@ -55,10 +55,10 @@ Additions of ours, documented in the README, each on by default because it measu
   polish round, below, once one has settled), and the fastest replaces it. This finds the
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
-  tuning runs); ``curve_search=0`` turns it off. Where the solutions form sets of two or more
-  dimensions (arms with more joints) there is no curve to follow, and a multi-start polish from
-  ``WIDE_PROBES`` times as many screened probes and every swarm's p_g takes its place
-  (``_multistart``);
+  tuning runs); ``curve_search=0`` turns it off. Where the solutions form no curves (isolated
+  points, or sets of two or more dimensions on arms with more joints) there is no curve to
+  follow, and a multi-start polish from ``WIDE_PROBES`` times as many screened probes and
+  every swarm's p_g takes its place (``_multistart``);
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -102,7 +102,7 @@ FREE_DEFAULTS = {'swarms': 8, 'polish_count': 2, 'polish_steps': 6}
 RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
 
-#: Where the solutions form a set of two or more dimensions (``_multistart``): probes polished
+#: Where the solutions form no curves (``_multistart``): probes polished
 #: per ``curve_search`` point, probes drawn per probe polished, the error (in arm reaches) up
 #: to which a projected probe counts as on the goal in that screening, the first polish's trust
 #: radius (rad), and how many of the fastest polished probes are polished further, for how
@@ -115,13 +115,13 @@ FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
 
-#: ``agreement`` where the solutions form sets of two or more dimensions: the multi-start that
-#: follows the swarm phase there searches them from every swarm's p_g and many probes, so the
-#: swarm phase ends once one refined candidate has settled on the goal. With 2 it ran 1.7 to
-#: 2.4 polish rounds on average on the SO-101, UR5 and Panda; with 1 the share of goals within
-#: 0.1 % of the bench's reference stayed the same on 1000 tuning goals (four arms), the median
-#: plan time fell by up to 27 % and the p99 by up to 47 %.
-WIDE_AGREEMENT = 1
+#: ``agreement`` where the multi-start follows the swarm phase (``_without_curves``): it
+#: searches the solutions from every swarm's p_g and many probes, so the swarm phase ends once
+#: one refined candidate has settled on the goal. With 2 it ran 1.7 to 2.4 polish rounds on
+#: average on the SO-101, UR5 and Panda in free mode; with 1 the share of goals within 0.1 % of
+#: the bench's reference stayed the same on 1000 tuning goals (four arms), the median plan
+#: time fell by up to 27 % and the p99 by up to 47 %.
+MULTISTART_AGREEMENT = 1
 
 #: Trust radius (rad) above which a candidate in a polish round still counts as converging
 #: (``_polish_is_enough``): a fifth of the polish's, after three rejected steps in a row.
@@ -343,14 +343,14 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     from their minimum, and near a straight elbow the polish converges only linearly), end early
     once one has settled on the goal and no candidate still converging could beat it
     (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``). Where
-    the solutions form sets of two or more dimensions, ``_multistart`` polishes ``WIDE_PROBES``
-    times ``probes`` screened probes and every swarm's p_g instead.
+    the solutions form no curves (``_without_curves``), ``_multistart`` polishes
+    ``WIDE_PROBES`` times ``probes`` screened probes and every swarm's p_g instead.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
     here = obj(best[None, :])
     reached = bool(here.error[0] <= ON_GOAL)
-    if _wide(obj):
+    if _without_curves(obj):
         polished = _multistart(obj, swarm.gbest, _probes(obj, rng, probes * WIDE_PROBES),
                                2 * steps)
     else:
@@ -373,9 +373,17 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         swarm.replace_gbest(s, found[i], efficiency[i], error[i])
 
 
-def _wide(obj: Objective) -> bool:
-    """Return whether the solutions form sets of two or more dimensions (``_multistart``)."""
-    return obj.arm.planned > (5 if obj.radial else 3) and curve_constraint(obj) is None
+def _without_curves(obj: Objective) -> bool:
+    """
+    Return whether the solutions form no curves, so ``_multistart`` searches them.
+
+    They are then isolated points (as many constraints as planned joints: radial mode on five,
+    free mode on three) or sets of two or more dimensions (more planned joints than the
+    constraints and one). Isolated points have no curve to follow either: a swarm lands on
+    the fastest of them less surely than a multi-start Newton search from many probes (on the
+    UR5 in radial mode 19 of 250 dev goals were missed without it, 1 with it).
+    """
+    return obj.arm.planned >= (5 if obj.radial else 3) and curve_constraint(obj) is None
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
@@ -400,8 +408,8 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     """
     Return the swarms' bests and the most promising probes polished, the fastest further (ours).
 
-    Where the solutions form a set of two or more dimensions (more planned joints than the
-    constraints and one), there is no curve to follow. The probes are screened: each is
+    Where the solutions form no curves (``_without_curves``) there is none to follow. The
+    probes are screened: each is
     projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
     part whose projections are fastest on the goal is kept. The swarms' p_g and the kept probes
     (as drawn: the polish from there, with steps as long as ``WIDE_TRUST``, reaches more of
@@ -498,15 +506,16 @@ def _settings(obj: Objective, population: int, max_iter: int, polish_period: int
     """
     Return ``swarms``, ``polish_count``, ``polish_steps`` and ``agreement``; defaults for None.
 
-    By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement`` ``WIDE_AGREEMENT``
-    where the multi-start follows the swarm phase (``_wide``), 2 elsewhere.
+    By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement``
+    ``MULTISTART_AGREEMENT`` where the multi-start follows the swarm phase
+    (``_without_curves``), 2 elsewhere.
     """
     defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
     swarms = defaults['swarms'] if swarms is None else swarms
     polish_count = defaults['polish_count'] if polish_count is None else polish_count
     polish_steps = defaults['polish_steps'] if polish_steps is None else polish_steps
     if agreement is None:
-        agreement = WIDE_AGREEMENT if curve_search and _wide(obj) else 2
+        agreement = MULTISTART_AGREEMENT if curve_search and _without_curves(obj) else 2
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError('population must be >= 2; swarms, max_iter, polish_count and '
                          'polish_period >= 1')
@@ -528,8 +537,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``), ``agreement`` to ``WIDE_AGREEMENT`` where the multi-start follows
-    (sets of two or more dimensions, ``curve_search`` on) and to 2 elsewhere. Without
+    ``RADIAL_DEFAULTS``), ``agreement`` to ``MULTISTART_AGREEMENT`` where the multi-start follows
+    (``_without_curves``, ``curve_search`` on) and to 2 elsewhere. Without
     ``polish`` this is the paper's algorithm alone, stopped by
     ``History.stalled``. ``interrupt`` is asked after every iteration the stopping rule has not
     ended; its reason ends the run with the best answer so far (see the module docstring).
