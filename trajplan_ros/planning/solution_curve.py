@@ -38,12 +38,6 @@ from trajplan_ros.planning.polish import Linearisation
 
 __all__ = ['curve_constraint', 'curve_seeds', 'follow', 'project']
 
-#: Steps of the walk along the curves (each way) per planned joint beyond three. The curves of
-#: an arm with more joints are longer in joint space: on the Panda in radial mode (six planned
-#: joints) 12 steps left a faster stretch of a curve unvisited on 12 of 300 development goals,
-#: 36 on 2; four planned joints (the paper's arm) keep the 12 they were tuned with.
-STEPS_PER_JOINT = 12
-
 
 def curve_constraint(obj: Objective) -> Objective | None:
     """
@@ -232,14 +226,11 @@ def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np
 
 
 def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
-                step: float = 0.7, steps: int | None = None, fine: float = 0.05) -> np.ndarray:
+                step: float = 0.7, steps: int = 12, fine: float = 0.05) -> np.ndarray:
     """
     Return seeds for ``polish`` along the curves through ``probes`` (see the module docstring).
 
     ``probes`` (K, planned) need not be solutions; none are returned where there is no curve.
-    Each curve is followed ``steps`` steps of ``step`` rad each way, by default
-    ``STEPS_PER_JOINT`` per planned joint beyond three (12 with four planned joints, 36 with
-    six).
     ``best`` is the answer so far (None when it does not reach the goal). Its curve is also
     sampled every ``fine`` rad near it, for minima closer to it than a ``step``. A seed is kept
     only if a faster solution than ``best`` may lie between its neighbours (``_lowest_time``),
@@ -253,7 +244,6 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     curve = curve_constraint(obj)
     if curve is None:
         return np.empty((0, probes.shape[1]))
-    steps = STEPS_PER_JOINT * (obj.arm.planned - 3) if steps is None else steps
     spacing = np.full(len(probes), step)
     if best is not None:
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
