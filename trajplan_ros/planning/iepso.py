@@ -44,9 +44,9 @@ Additions of ours, documented in the README, each on by default because it measu
   goal is not reached; the paper's convergence precision), or after ``max_iter`` iterations.
   F itself is not compared for agreement: eq. (17) changes it by 0.024 per picometre of
   error, far below any meaningful difference;
-* a curve search (``_curve_search``) once the run stops, where the solutions form curves (one
-  free direction: free mode with four planned joints, radial mode with six; radial mode with
-  four through the curves of the position constraint alone): ``solution_curve`` follows the
+* a curve search (``_curve_search``) once the run stops, on arms with four planned joints,
+  where the solutions form curves (one free direction in free mode; in radial mode through the
+  curves of the position constraint alone): ``solution_curve`` follows the
   curves through the answer and through ``curve_search`` (20) points drawn inside the limits,
   both ways through the limits, and returns the points where the motion time is least along
   them (on position-only curves, where the tool axis comes nearest the goal ray), where they
@@ -55,10 +55,10 @@ Additions of ours, documented in the README, each on by default because it measu
   polish round, below, once one has settled), and the fastest replaces it. This finds the
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
-  tuning runs); ``curve_search=0`` turns it off. Where the solutions form no curves (isolated
-  points, or sets of two or more dimensions on arms with more joints) there is no curve to
-  follow, and a multi-start polish from ``WIDE_PROBES`` times as many screened probes and
-  every swarm's p_g takes its place (``_multistart``);
+  tuning runs); ``curve_search=0`` turns it off. On arms with other numbers of planned joints
+  (isolated solutions, sets of two or more dimensions, or curves in six joints, longer than
+  the walk covers: ``_by_multistart``) a multi-start polish from ``WIDE_PROBES`` times as many
+  screened probes and every swarm's p_g takes its place (``_multistart``);
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -89,7 +89,7 @@ from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
 from trajplan_ros.planning.polish import polish as polish_candidates, settle
-from trajplan_ros.planning.solution_curve import curve_constraint, curve_seeds, project
+from trajplan_ros.planning.solution_curve import curve_seeds, project
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
@@ -102,7 +102,7 @@ FREE_DEFAULTS = {'swarms': 8, 'polish_count': 2, 'polish_steps': 6}
 RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
 
-#: Where the solutions form no curves (``_multistart``): probes polished
+#: The multi-start (``_multistart``, ``_by_multistart``): probes polished
 #: per ``curve_search`` point, probes drawn per probe polished, the error (in arm reaches) up
 #: to which a projected probe counts as on the goal in that screening, the first polish's trust
 #: radius (rad), and how many of the fastest polished probes are polished further, for how
@@ -115,7 +115,7 @@ FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
 
-#: ``agreement`` where the multi-start follows the swarm phase (``_without_curves``): it
+#: ``agreement`` where the multi-start follows the swarm phase (``_by_multistart``): it
 #: searches the solutions from every swarm's p_g and many probes, so the swarm phase ends once
 #: one refined candidate has settled on the goal. With 2 it ran 1.7 to 2.4 polish rounds on
 #: average on the SO-101, UR5 and Panda in free mode; with 1 the share of goals within 0.1 % of
@@ -342,15 +342,15 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     the polish steps of a round (they may start a little off the solutions and far along them
     from their minimum, and near a straight elbow the polish converges only linearly), end early
     once one has settled on the goal and no candidate still converging could beat it
-    (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``). Where
-    the solutions form no curves (``_without_curves``), ``_multistart`` polishes
-    ``WIDE_PROBES`` times ``probes`` screened probes and every swarm's p_g instead.
+    (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``).
+    Elsewhere (``_by_multistart``) ``_multistart`` polishes ``WIDE_PROBES`` times ``probes``
+    screened probes and every swarm's p_g instead.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
     here = obj(best[None, :])
     reached = bool(here.error[0] <= ON_GOAL)
-    if _without_curves(obj):
+    if _by_multistart(obj):
         polished = _multistart(obj, swarm.gbest, _probes(obj, rng, probes * WIDE_PROBES),
                                2 * steps)
     else:
@@ -373,17 +373,20 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         swarm.replace_gbest(s, found[i], efficiency[i], error[i])
 
 
-def _without_curves(obj: Objective) -> bool:
+def _by_multistart(obj: Objective) -> bool:
     """
-    Return whether the solutions form no curves, so ``_multistart`` searches them.
+    Return whether ``_multistart`` searches the solutions after the swarm phase (ours).
 
-    They are then isolated points (as many constraints as planned joints: radial mode on five,
-    free mode on three) or sets of two or more dimensions (more planned joints than the
-    constraints and one). Isolated points have no curve to follow either: a swarm lands on
-    the fastest of them less surely than a multi-start Newton search from many probes (on the
-    UR5 in radial mode 19 of 250 dev goals were missed without it, 1 with it).
+    Everywhere but on the curves of four planned joints, which the curve search follows: on
+    isolated points (as many constraints as planned joints: radial mode on five, free mode on
+    three), where a swarm lands on the fastest less surely than a multi-start Newton search
+    from many probes (on the UR5 in radial mode 19 of 250 dev goals were missed without it, 1
+    with it); on sets of two or more dimensions, which have no curve to follow; and on the
+    longer curves of six planned joints (radial mode), where the walk along the curves needed
+    three times the steps to miss as few (Panda: 12 of 300 dev goals missed with 12 steps, 2
+    with 36 at 34 ms, 1 with the multi-start at 20 ms).
     """
-    return obj.arm.planned >= (5 if obj.radial else 3) and curve_constraint(obj) is None
+    return obj.arm.planned != 4 and obj.arm.planned >= (5 if obj.radial else 3)
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
@@ -408,9 +411,8 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     """
     Return the swarms' bests and the most promising probes polished, the fastest further (ours).
 
-    Where the solutions form no curves (``_without_curves``) there is none to follow. The
-    probes are screened: each is
-    projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
+    Where the curve search does not serve (``_by_multistart``). The probes are screened: each
+    is projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
     part whose projections are fastest on the goal is kept. The swarms' p_g and the kept probes
     (as drawn: the polish from there, with steps as long as ``WIDE_TRUST``, reaches more of
     the fast minima than from the projections) are polished ``steps`` steps, then the
@@ -508,14 +510,14 @@ def _settings(obj: Objective, population: int, max_iter: int, polish_period: int
 
     By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement``
     ``MULTISTART_AGREEMENT`` where the multi-start follows the swarm phase
-    (``_without_curves``), 2 elsewhere.
+    (``_by_multistart``), 2 elsewhere.
     """
     defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
     swarms = defaults['swarms'] if swarms is None else swarms
     polish_count = defaults['polish_count'] if polish_count is None else polish_count
     polish_steps = defaults['polish_steps'] if polish_steps is None else polish_steps
     if agreement is None:
-        agreement = MULTISTART_AGREEMENT if curve_search and _without_curves(obj) else 2
+        agreement = MULTISTART_AGREEMENT if curve_search and _by_multistart(obj) else 2
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError('population must be >= 2; swarms, max_iter, polish_count and '
                          'polish_period >= 1')
@@ -538,7 +540,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
     ``RADIAL_DEFAULTS``), ``agreement`` to ``MULTISTART_AGREEMENT`` where the multi-start follows
-    (``_without_curves``, ``curve_search`` on) and to 2 elsewhere. Without
+    (``_by_multistart``, ``curve_search`` on) and to 2 elsewhere. Without
     ``polish`` this is the paper's algorithm alone, stopped by
     ``History.stalled``. ``interrupt`` is asked after every iteration the stopping rule has not
     ended; its reason ends the run with the best answer so far (see the module docstring).
