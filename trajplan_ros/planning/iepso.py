@@ -539,11 +539,11 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``), ``agreement`` to ``MULTISTART_AGREEMENT`` where the multi-start follows
-    (``_by_multistart``, ``curve_search`` on) and to 2 elsewhere. Without
-    ``polish`` this is the paper's algorithm alone, stopped by
-    ``History.stalled``. ``interrupt`` is asked after every iteration the stopping rule has not
-    ended; its reason ends the run with the best answer so far (see the module docstring).
+    ``RADIAL_DEFAULTS``), ``agreement`` to ``MULTISTART_AGREEMENT`` where the multi-start
+    follows (``_by_multistart``, ``curve_search`` on) and to 2 elsewhere. Without ``polish``
+    this is the paper's algorithm alone, stopped by ``History.stalled``. ``interrupt`` is
+    asked after every iteration the stopping rule has not ended; its reason ends the run with
+    the best answer so far (see the module docstring).
     """
     swarms, polish_count, polish_steps, agreement = _settings(
         obj, population, max_iter, polish_period, swarms, polish_count, polish_steps, agreement,
