@@ -56,9 +56,10 @@ Additions of ours, documented in the README, each on by default because it measu
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
   tuning runs); ``curve_search=0`` turns it off. On arms with other numbers of planned joints
-  (isolated solutions, sets of two or more dimensions, or curves in six joints, longer than
-  the walk covers: ``_by_multistart``) a multi-start polish from ``WIDE_PROBES`` times as many
-  screened probes and every swarm's p_g takes its place (``_multistart``);
+  (``_by_multistart``) a multi-start polish from ``WIDE_PROBES`` times as many screened probes
+  and every swarm's p_g (``_multistart``) takes its place where the solutions form no curves
+  (isolated solutions, sets of two or more dimensions) and joins it on the longer curves of
+  six planned joints;
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -89,7 +90,7 @@ from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
 from trajplan_ros.planning.polish import polish as polish_candidates, settle
-from trajplan_ros.planning.solution_curve import curve_seeds, project
+from trajplan_ros.planning.solution_curve import curve_constraint, curve_seeds, project
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
@@ -342,27 +343,24 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     the polish steps of a round (they may start a little off the solutions and far along them
     from their minimum, and near a straight elbow the polish converges only linearly), end early
     once one has settled on the goal and no candidate still converging could beat it
-    (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``).
-    Elsewhere (``_by_multistart``) ``_multistart`` polishes ``WIDE_PROBES`` times ``probes``
-    screened probes and every swarm's p_g instead.
+    (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``,
+    ``_along_curves``). Where ``_by_multistart``, ``_multistart`` polishes ``WIDE_PROBES``
+    times ``probes`` screened probes and every swarm's p_g, instead of the seeds where the
+    solutions form no curves, beside them on curves of six planned joints.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
     here = obj(best[None, :])
     reached = bool(here.error[0] <= ON_GOAL)
+    polished = np.empty((0, best.size))
     if _by_multistart(obj):
         polished = _multistart(obj, swarm.gbest, _probes(obj, rng, probes * WIDE_PROBES),
                                2 * steps)
-    else:
-        points = np.concatenate((best[None, :],
-                                 initial_population(rng, obj.lower, obj.upper, (probes,))))
-        seeds = curve_seeds(obj, points, best if reached else None)
-        if not len(seeds):
-            return
-        enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL,
-                                   faster=False)
-        polished = settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, enough=enough),
-                          ON_GOAL)
+    if curve_constraint(obj) is not None:
+        polished = np.concatenate((polished, _along_curves(obj, rng, best, reached, probes,
+                                                           steps)))
+    if not len(polished):
+        return
     found = np.concatenate((best[None, :], polished))
     ev = obj(polished)
     efficiency = np.concatenate((here.efficiency, ev.efficiency))
@@ -373,18 +371,32 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
         swarm.replace_gbest(s, found[i], efficiency[i], error[i])
 
 
+def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, reached: bool,
+                  probes: int, steps: int) -> np.ndarray:
+    """Return the seeds along the curves through ``best`` and ``probes`` points, polished."""
+    points = np.concatenate((best[None, :],
+                             initial_population(rng, obj.lower, obj.upper, (probes,))))
+    seeds = curve_seeds(obj, points, best if reached else None)
+    if not len(seeds):
+        return seeds
+    enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL, faster=False)
+    return settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, enough=enough),
+                  ON_GOAL)
+
+
 def _by_multistart(obj: Objective) -> bool:
     """
     Return whether ``_multistart`` searches the solutions after the swarm phase (ours).
 
-    Everywhere but on the curves of four planned joints, which the curve search follows: on
-    isolated points (as many constraints as planned joints: radial mode on five, free mode on
-    three), where a swarm lands on the fastest less surely than a multi-start Newton search
+    Everywhere but on the curves of four planned joints, which the curve search alone serves:
+    on isolated points (as many constraints as planned joints: radial mode on five, free mode
+    on three), where a swarm lands on the fastest less surely than a multi-start Newton search
     from many probes (on the UR5 in radial mode 19 of 250 dev goals were missed without it, 1
-    with it); on sets of two or more dimensions, which have no curve to follow; and on the
-    longer curves of six planned joints (radial mode), where the walk along the curves needed
-    three times the steps to miss as few (Panda: 12 of 300 dev goals missed with 12 steps, 2
-    with 36 at 34 ms, 1 with the multi-start at 20 ms).
+    with it); on sets of two or more dimensions, which have no curve to follow; and, beside the
+    curve search, on the longer curves of six planned joints (radial mode). There the walk
+    along the curves alone missed a faster stretch on 12 of 300 Panda dev goals (2 with a walk
+    three times as long, at 34 ms), the multi-start alone an optimum on a joint limit on 4 of
+    150 (the walk's seeds include the limits), both together on 1 of 150 (31 ms).
     """
     return obj.arm.planned != 4 and obj.arm.planned >= (5 if obj.radial else 3)
 
