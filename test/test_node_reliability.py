@@ -78,8 +78,10 @@ def test_concurrent_callers_are_all_answered_once_in_order(lone_node) -> None:
     finally:
         for client in clients:
             client.close()
-    logged = lone_node.matches(r'\]: service call #(\d+) \(')
-    numbers = [int(m.group(1)) for m in logged]
+    # the node logs a call after handing over its answer: wait for the last line
+    pattern = r'\]: service call #(\d+) \('
+    wait_until(lambda: len(lone_node.matches(pattern)) >= 27, what='27 calls logged')
+    numbers = [int(m.group(1)) for m in lone_node.matches(pattern)]
     assert sorted(numbers) == list(range(1, 28))         # 3 + 24 calls, each planned once
     assert numbers == sorted(numbers)                    # in arrival order
 
@@ -99,11 +101,11 @@ def test_calls_beyond_the_queue_and_at_shutdown_are_answered(start_node, peer) -
     assert len(node.matches(full)) == 3
     node.proc.send_signal(signal.SIGINT)
     assert node.proc.wait(timeout=LIVENESS_S) == 0, node.output
+    node.stop()                                          # every log line read
     answers = [peer.result(f) for f in [first, *rest]]
     assert all(list(a.plan.poses) == [] for a in answers)            # every one answered, empty
     assert len(node.matches(r'service call #\d+ .*: unplanned: shutting down')) >= 3
     assert 'Traceback' not in node.output
-    node.stop()
 
 
 def test_answers_held_by_a_late_client_all_arrive(lone_node) -> None:
