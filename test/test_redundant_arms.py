@@ -75,15 +75,15 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     # other sets' KKT systems) against each set's KKT system solved on its own
     rng = np.random.default_rng(10 + k)
     r = min(m, k + _LARGEST)
-    pieces, ties = _active_sets(r, k)
-    idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
+    sets = _active_sets(r, k)
+    pieces, ties = sets.pieces, sets.ties
     null = np.stack([np.linalg.qr(rng.normal(size=(m, k)))[0].T for _ in range(6)])
     quad = rng.normal(0.0, 0.3, (6, k, k, m))
     quad = 0.5 * (quad + np.swapaxes(quad, 1, 2))
     b = rng.uniform(-3.0, 3.0, (6, m))
     gap_lo, gap_hi = rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m))
     grad, hess, rhs, joint = _pieces(b, null, quad, rng.uniform(1.0, 2.0, m), gap_lo, gap_hi, r)
-    z = _sqp_steps(grad, hess, rhs, joint, pieces, ties, idle)
+    z = _sqp_steps(grad, hess, rhs, joint, sets)
     for i in range(6):
         for c, (set_pieces, set_ties) in enumerate(zip(pieces, ties)):
             used = [int(p) for p in set_pieces if p != r + _WALLS]

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import functools
 import itertools
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -84,10 +84,19 @@ def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
     return np.triu_indices(m, 1)
 
 
+class _ActiveSets(NamedTuple):
+    """The active sets that ``_active_set_minimax`` tries (``_active_sets``)."""
+
+    pieces: np.ndarray      # (C, k + 1): the pieces of each set
+    ties: np.ndarray        # (C, k + 1): 1 where the piece is a joint's displacement
+    idle: np.ndarray        # (C, k + 1, k + 1): 1 on the diagonal at the unused slots
+    vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
+
+
 @functools.lru_cache(maxsize=8)
-def _active_sets(r: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+def _active_sets(r: int, k: int) -> _ActiveSets:
     """
-    Return the active sets that ``_active_set_minimax`` tries: pieces (C, k + 1), ties (C, k + 1).
+    Return the active sets that ``_active_set_minimax`` tries (``_ActiveSets``).
 
     Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r and
     r + 1 the two limits nearest to the candidate, and r + 2 an unused slot; ``ties`` marks
@@ -100,7 +109,9 @@ def _active_sets(r: int, k: int) -> tuple[np.ndarray, np.ndarray]:
             for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
             for s in itertools.combinations(range(r), j) if s[0] == 0]
     pieces = np.array(sets)
-    return pieces, (pieces < r).astype(float)
+    unused = pieces == r + _WALLS
+    return _ActiveSets(pieces, (pieces < r).astype(float),
+                       unused.astype(float)[:, :, None] * np.eye(k + 1), ~unused.any(axis=1))
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -133,22 +144,22 @@ def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray
 
 
 def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.ndarray,
-               pieces: np.ndarray, ties: np.ndarray, idle: np.ndarray) -> np.ndarray:
+               sets: _ActiveSets) -> np.ndarray:
     """
     Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
 
     The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
-    A set of k + 1 pieces (a vertex: no unused slot in ``idle``, (C, p, p)) fixes z and t by
-    those k + 1 equations alone (``_vertex_steps``); a smaller one takes the Hessian of the
-    Lagrangian into account (``_kkt_steps``). A set that ties a joint it also holds at a limit
+    A set of k + 1 pieces (a vertex: no unused slot) fixes z and t by those k + 1 equations
+    alone (``_vertex_steps``); a smaller one takes the Hessian of the Lagrangian into account
+    (``_kkt_steps``). A set that ties a joint it also holds at a limit
     has no step (z = 0).
     """
+    pieces, ties, idle, vertex = sets
     g = grad[:, pieces]                                                     # (K, C, p, k)
     held = joint[:, pieces]                                                 # (K, C, p)
     clash = np.any((np.where(ties > 0, held, -2)[..., :, None]
                     == np.where((ties == 0) & (held >= 0), held, -3)[..., None, :]), axis=(2, 3))
     right = np.where(clash[..., None], 0.0, rhs[:, pieces])
-    vertex = ~idle.any(axis=(1, 2))
     z = np.empty(g.shape[:2] + g.shape[3:])
     z[:, vertex] = _vertex_steps(g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
     z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
@@ -234,9 +245,7 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     """
     k_count, k, m = null.shape
     r = min(m, k + _LARGEST)
-    pieces, ties = _active_sets(r, k)                                      # (C, k + 1)
-    idle = (pieces == r + _WALLS).astype(float)[:, :, None] * np.eye(pieces.shape[1])
-    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, ties, idle)
+    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), _active_sets(r, k))
     z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
     z = _within(z, limit[:, None])
     linear = z @ null
