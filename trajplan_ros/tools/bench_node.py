@@ -45,7 +45,7 @@ from rclpy.utilities import get_rmw_implementation_identifier
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.planner import plan
 from trajplan_ros.tools.node_process import describe_goal, PlannerProcess, ros_environment
-from trajplan_ros.tools.ros_client import KEEP_ALL, RosClient
+from trajplan_ros.tools.ros_client import RosClient
 
 
 __all__ = ['main']
@@ -134,9 +134,10 @@ def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
 
 def _service_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
                    more_goals: np.ndarray) -> tuple[bool, list[str]]:
-    client = ros.node.create_client(GetPlan, 'plan_trajectory', qos_profile=KEEP_ALL)
-    if not client.wait_for_service(timeout_sec=TIMEOUT_S):
-        return False, ['no plan_trajectory service']
+    try:
+        client = ros.client(GetPlan, 'plan_trajectory', TIMEOUT_S)
+    except TimeoutError as exc:
+        return False, [str(exc)]
     single = _calls(node, ros, client, goals, idle=True)
     if isinstance(single, str):
         return False, [single]
@@ -243,10 +244,10 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
     # a history as deep as the stream: a reliable writer drops its oldest unacknowledged sample
     # when a shorter history is full
     publisher = ros.node.create_publisher(Point, 'goal', len(goals))
-    params = ros.node.create_client(GetParameters, 'trajplan/get_parameters',
-                                    qos_profile=KEEP_ALL)
-    if not params.wait_for_service(timeout_sec=TIMEOUT_S):
-        return False, ['no parameter service']
+    try:
+        params = ros.client(GetParameters, 'trajplan/get_parameters', TIMEOUT_S)
+    except TimeoutError as exc:
+        return False, [str(exc)]
     _warm_up(node, ros, publisher, params)
     latencies: list[float] = []
     stop = threading.Event()
