@@ -177,11 +177,12 @@ class Objective:
 
     def linear_residuals(self, dp: np.ndarray, du: np.ndarray) -> np.ndarray:
         """
-        Return the change of the residuals for changes dp, du (N, 3) of the tool point and axis.
+        Return the change of the residuals for changes dp, du (..., N, 3) of the tool point and
+        axis.
 
         The residuals are linear in p and u, so this also maps their derivatives.
         """
-        return np.concatenate((dp, du @ self.ray_basis[1:].T), axis=1) if self.radial else dp
+        return np.concatenate((dp, du @ self.ray_basis[1:].T), axis=-1) if self.radial else dp
 
     def axis_angle(self, u: np.ndarray) -> np.ndarray:
         """Return the angle (rad) between each tool axis u (N, 3) and the goal ray p / |p|."""

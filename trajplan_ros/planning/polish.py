@@ -365,20 +365,18 @@ class Linearisation:
         else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.quad = np.zeros((k, free, free, dim))
-        for j in range(free):
-            self.quad[:, j, j] = self._second(obj, d, self.null[:, j])
-        for a, b in itertools.combinations(range(free), 2):
-            both = self._second(obj, d, self.null[:, a] + self.null[:, b])
-            self.quad[:, a, b] = self.quad[:, b, a] = (
-                0.5 * both - 0.5 * (self.quad[:, a, a] + self.quad[:, b, b]))
-
-    def _second(self, obj: Objective, d: ToolJacobian, n: np.ndarray) -> np.ndarray:
-        """Return half the second derivative of the solutions along null direction(s) n."""
-        return 0.5 * self.newton(obj.linear_residuals(*d.curvature(n)))
+        if free:        # every direction and every pair of directions in one pass
+            a, b = _pairs(free)
+            both = np.concatenate((self.null, self.null[:, a] + self.null[:, b]), axis=1)
+            half = 0.5 * self.newton(obj.linear_residuals(*d.curvature(np.swapaxes(both, 0, 1))))
+            diagonal = np.arange(free)
+            self.quad[:, diagonal, diagonal] = np.swapaxes(half[:free], 0, 1)
+            self.quad[:, a, b] = self.quad[:, b, a] = np.swapaxes(
+                0.5 * half[free:] - 0.5 * (half[a] + half[b]), 0, 1)
 
     def newton(self, res: np.ndarray) -> np.ndarray:
-        """Minimum-norm step dx with J dx = -res (least squares where J is not onto)."""
-        return -(self.pinv @ res[:, :, None])[:, :, 0]
+        """Minimum-norm steps dx (..., K, planned): J dx = -res (least squares if J is not onto)."""
+        return -(self.pinv @ res[..., None])[..., 0]
 
     _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
 
