@@ -116,6 +116,24 @@ def test_the_polish_finds_the_local_minimum_it_starts_near(name: str) -> None:
             assert obj.motion_time(again[None])[0] >= ours * (1 - 1e-4)
 
 
+@pytest.mark.parametrize('name', ['so101', 'panda'])
+def test_pruned_candidates_stop_where_they_are_and_the_best_go_on(name: str) -> None:
+    """After ``prune`` = (s, c) steps only the c candidates of least merit take more steps."""
+    arm = published(name)
+    rng = np.random.default_rng(5)
+    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    x0 = rng.uniform(obj.lower, obj.upper, (6, obj.arm.planned))
+    after = polish(obj, x0, max_steps=2, trust=1.5)
+    weight = 1e3 / arm.reach
+    merit = obj.motion_time(after) * obj.omega + weight * obj.errors(*obj.tool(after))
+    best = np.sort(np.argsort(merit)[:2])
+    pruned = polish(obj, x0, max_steps=8, trust=1.5, prune=(2, 2))
+    rest = np.setdiff1d(np.arange(6), best)
+    np.testing.assert_array_equal(pruned[rest], after[rest])
+    assert not np.array_equal(pruned[best], after[best])
+
+
 def test_joints_beyond_a_turn_search_the_turn_nearest_the_start() -> None:
     arm = published('ur5')
     start = np.zeros(6)

@@ -177,8 +177,7 @@ class Objective:
 
     def linear_residuals(self, dp: np.ndarray, du: np.ndarray) -> np.ndarray:
         """
-        Return the change of the residuals for changes dp, du (..., N, 3) of the tool point and
-        axis.
+        Return the change of the residuals for changes dp, du (..., N, 3) of the tool p and u.
 
         The residuals are linear in p and u, so this also maps their derivatives.
         """

@@ -48,7 +48,6 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.arm import ToolJacobian
 from trajplan_ros.planning.objective import Objective
 
 __all__ = ['Linearisation', 'polish', 'settle']
@@ -375,7 +374,7 @@ class Linearisation:
                 0.5 * half[free:] - 0.5 * (half[a] + half[b]), 0, 1)
 
     def newton(self, res: np.ndarray) -> np.ndarray:
-        """Minimum-norm steps dx (..., K, planned): J dx = -res (least squares if J is not onto)."""
+        """Minimum-norm steps dx (..., K, planned): J dx = -res (least squares off its range)."""
         return -(self.pinv @ res[..., None])[..., 0]
 
     _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
@@ -456,8 +455,8 @@ def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
-           enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None
-           ) -> np.ndarray:
+           enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None,
+           prune: tuple[int, int] | None = None) -> np.ndarray:
     """
     Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
@@ -467,6 +466,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     ``trust``, and 0 once converged). A candidate has converged when its radius falls to
     ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also when it is on the solutions and its
     steps were rejected ``_STALLED`` times in a row (it then takes no more steps).
+    ``prune`` = (steps, count), if given: after that many steps, only the ``count`` candidates
+    of least merit take further steps; the others are returned where they are.
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
@@ -479,7 +480,13 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     rows = np.arange(k)                     # the candidates that take steps
     rejected = np.zeros(k, dtype=int)
     time, error = here.time.copy(), here.error.copy()
-    for _ in range(max_steps):
+    for step in range(max_steps):
+        if prune is not None and step == prune[0] and len(rows) > prune[1]:
+            best = np.zeros(len(rows), dtype=bool)
+            best[np.argsort(here.merit, kind='stable')[: prune[1]]] = True
+            delta[rows[~best]] = 0.0
+            rows = rows[best]
+            here.take(best)
         radius = delta[rows]
         trial = _trial(obj, here, x[rows], radius, wide)
         there = Linearisation(obj, trial, weight)
