@@ -21,8 +21,10 @@ def published(name: str) -> ArmModel:
     return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link)
 
 
+@pytest.mark.parametrize('vertex_only', [False, True])
 @pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
-def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: int) -> None:
+def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: int,
+                                                                   vertex_only: bool) -> None:
     rng = np.random.default_rng(k)
     compared = 0
     for _ in range(200):
@@ -30,7 +32,7 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
         b = rng.choice([-1.0, 1.0], (1, m)) * rng.uniform(1.0, 3.0, (1, m))
         scale = rng.uniform(1.0, 2.0, m)
         z = _active_set_minimax(b, null, np.zeros((1, k, k, m)), scale, np.full((1, m), -10.0),
-                                np.full((1, m), 10.0), np.array([100.0]))
+                                np.full((1, m), 10.0), np.array([100.0]), vertex_only)
         ours = np.max(np.abs(b[0] + z[0] @ null[0]) * scale)
         assert ours <= np.max(np.abs(b[0]) * scale) + 1e-12             # never worse
         # the same problem as a linear programme: min t, -t <= scale (b + N^T z) <= t

@@ -112,6 +112,9 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 #: that gave the multi-start's answer ranked 24th or worse at step 6 on 2, at step 4 on 8;
 #: pruning at step 6 to 24 cut the median by 9 to 17 % and missed one more goal of 400 on the
 #: hardest set (Panda, 99.3 % to 99.0 % within 0.1 % of the reference).
+#: ``MULTISTART_VERTEX_STEPS``: the first polish's first steps try only the vertex sets of the
+#: SQP step (``polish``): Panda median 19 % lower, SO-101 and UR5 4 %; 9 goals of 1800 dev
+#: goals (five arms and start kinds) missed against 8.
 WIDE_PROBES = 3
 SCREENED = 3
 SCREEN_ERROR = 1e-6
@@ -120,6 +123,7 @@ FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
 MULTISTART_PRUNED = (6, 24)
+MULTISTART_VERTEX_STEPS = 4
 
 #: ``agreement`` where the multi-start follows the swarm phase (``_by_multistart``): it
 #: searches the solutions from every swarm's p_g and many probes, so the swarm phase ends once
@@ -441,7 +445,7 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
     points = np.concatenate((bests, probes[keep[: len(probes) // SCREENED]]))
     first = polish_candidates(obj, points, max_steps=steps, trust=WIDE_TRUST,
-                              prune=MULTISTART_PRUNED)
+                              prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS)
     ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > ON_GOAL))[:FINISHED]
     finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS)

@@ -92,8 +92,8 @@ class _ActiveSets(NamedTuple):
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
 
 
-@functools.lru_cache(maxsize=8)
-def _active_sets(r: int, k: int) -> _ActiveSets:
+@functools.lru_cache(maxsize=16)
+def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     """
     Return the active sets that ``_active_set_minimax`` tries (``_ActiveSets``).
 
@@ -101,13 +101,14 @@ def _active_sets(r: int, k: int) -> _ActiveSets:
     r + 1 the two limits nearest to the candidate, and r + 2 an unused slot; ``ties`` marks
     the joints. Every set of 1 to k + 1 joints that holds the largest (near a minimum the
     tying joints are the largest; away from one, a step that lowers the largest is what
-    counts), with none, either or both limits, at most k + 1 pieces in all.
+    counts), with none, either or both limits, at most k + 1 pieces in all; with
+    ``vertex_only``, only the sets of k + 1 pieces.
     """
     walls = [w for n in range(_WALLS + 1) for w in itertools.combinations(range(r, r + _WALLS), n)]
     sets = [(*s, *w, *([r + _WALLS] * (k + 1 - j - len(w))))
             for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
             for s in itertools.combinations(range(r), j) if s[0] == 0]
-    pieces = np.array(sets)
+    pieces = np.array([s for s in sets if not vertex_only or r + _WALLS not in s])
     unused = pieces == r + _WALLS
     return _ActiveSets(pieces, (pieces < r).astype(float),
                        unused.astype(float)[:, :, None] * np.eye(k + 1), ~unused.any(axis=1))
@@ -161,8 +162,9 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     right = np.where(clash[..., None], 0.0, rhs[:, pieces])
     z = np.empty(g.shape[:2] + g.shape[3:])
     z[:, vertex] = _vertex_steps(g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
-    z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
-                               idle[~vertex], right[:, ~vertex], clash[:, ~vertex])
+    if not vertex.all():
+        z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
+                                   idle[~vertex], right[:, ~vertex], clash[:, ~vertex])
     return np.where(np.isfinite(z), z, 0.0)
 
 
@@ -227,8 +229,8 @@ def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
-                        gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray
-                        ) -> np.ndarray:
+                        gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray,
+                        vertex_only: bool = False) -> np.ndarray:
     """
     Return z (K, k) that minimises max_i scale_i |d_i(z)| on the quadratic model of the solutions.
 
@@ -240,11 +242,12 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     reached), ``_sqp_steps``. With k + 1 pieces that is a vertex of the linear model, whatever
     the Hessian. Every step is shortened to the trust radius and judged on the model: its linear
     part must keep within the limits, and where the curvature term passes a limit the joint is
-    clipped to it; the best, or z = 0, wins.
+    clipped to it; the best, or z = 0, wins. ``vertex_only``: the vertices alone (cheaper).
     """
     k_count, k, m = null.shape
     r = min(m, k + _LARGEST)
-    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r), _active_sets(r, k))
+    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r),
+                   _active_sets(r, k, vertex_only))
     z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
     z = _within(z, limit[:, None])
     linear = z @ null
@@ -392,8 +395,8 @@ class Linearisation:
 
 
 def _null_step(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.ndarray,
-               scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, delta: np.ndarray
-               ) -> np.ndarray:
+               scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, delta: np.ndarray,
+               vertex_only: bool) -> np.ndarray:
     """
     Return the candidates ``base`` (K, m) moved along the solutions to lower R (the SQP step).
 
@@ -401,7 +404,8 @@ def _null_step(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.n
     trust radii. The step is the quadratic model's (``_active_set_minimax``), clipped to the
     joint limits.
     """
-    z = _active_set_minimax(base - start, null, quad, scale, lo - base, hi - base, delta)
+    z = _active_set_minimax(base - start, null, quad, scale, lo - base, hi - base, delta,
+                            vertex_only)
     step = np.einsum('kj,kjm->km', z, null) + np.einsum('ka,kabm,kb->km', z, quad, z)
     return np.clip(base + step, lo, hi)
 
@@ -427,7 +431,7 @@ def _line_searches(here: Linearisation, base: np.ndarray, start: np.ndarray,
 
 
 def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarray,
-           wide: bool) -> np.ndarray:
+           wide: bool, vertex_only: bool) -> np.ndarray:
     """
     Return the polish's trial points from candidates x (K, planned) and their linearisation.
 
@@ -439,7 +443,8 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
     start = obj.start[: obj.arm.planned]
     base = x + _within(here.newton(here.c), radius)
     if wide:
-        base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius)
+        base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius,
+                          vertex_only)
     else:
         base = _line_searches(here, base, start, scale, lo, hi, radius)
     trial = np.clip(base, lo, hi)
@@ -456,7 +461,7 @@ def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
            enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None,
-           prune: tuple[int, int] | None = None) -> np.ndarray:
+           prune: tuple[int, int] | None = None, vertex_steps: int = 0) -> np.ndarray:
     """
     Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
@@ -467,7 +472,9 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also when it is on the solutions and its
     steps were rejected ``_STALLED`` times in a row (it then takes no more steps).
     ``prune`` = (steps, count), if given: after that many steps, only the ``count`` candidates
-    of least merit take further steps; the others are returned where they are.
+    of least merit take further steps; the others are returned where they are. On sets of 2+
+    dimensions the first ``vertex_steps`` SQP steps try only the vertex sets of
+    ``_active_set_minimax`` (far from a minimum, the step that counts).
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
@@ -488,7 +495,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
             rows = rows[best]
             here.take(best)
         radius = delta[rows]
-        trial = _trial(obj, here, x[rows], radius, wide)
+        trial = _trial(obj, here, x[rows], radius, wide, step < vertex_steps)
         there = Linearisation(obj, trial, weight)
         moved = np.sqrt(np.einsum('km,km->k', trial - x[rows], trial - x[rows]))
         accept = (radius > 0.0) & (there.merit < here.merit)
