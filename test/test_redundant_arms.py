@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import linprog
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning import plan
+from trajplan_ros.planning import iepso as iepso_module, plan
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
                                           _pieces, _sqp_steps, _WALLS, polish)
@@ -167,3 +167,19 @@ def test_plans_reach_and_beat_the_pose_the_goal_came_from(name: str) -> None:
         turned = obj.lower + np.mod(source[:m] - obj.lower, 2 * np.pi)
         pose = np.where(obj.upper - obj.lower >= 2 * np.pi - 1e-9, turned, source[:m])
         assert result.motion_time_s <= obj.motion_time(pose[None])[0]
+
+
+def test_the_multistart_takes_the_place_of_the_polish_round() -> None:
+    """Where the multi-start follows, the swarms run one polish period and no round."""
+    arm = published('so101')
+    rng = np.random.default_rng(11)
+    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    rounds = []
+    original = iepso_module._polish_round
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(iepso_module, '_polish_round',
+                      lambda *a, **k: rounds.append(1) or original(*a, **k))
+        result = iepso_module.iepso(obj, seed=0, polish_period=5)
+    assert result.nit == 5 and not rounds
+    assert result.converged and result.error <= 1e-9

@@ -33,11 +33,12 @@ Additions of ours, documented in the README, each on by default because it measu
   member often lands on a solution branch the swarm has not settled on) are refined by
   ``polish.polish`` (exact reach, least motion time along the solutions, at most
   ``polish_steps`` steps: 6); the best refined one goes back into its swarm, which carries on
-  from there;
+  from there. Where the multi-start follows (``_by_multistart``, below) there is no separate
+  round: the run stops after the first ``polish_period`` iterations and the multi-start
+  polishes those same candidates among its probes;
 * swarm-level last-elimination (``restart``, ``_restart``): after a polish round, swarms whose
   best is worse than the overall best by more than ``tol`` are drawn anew;
-* the run stops after a polish round (``_Stopping``) when at least ``agreement`` (2; 1 where
-  the multi-start searches the solutions after the swarm phase, ``MULTISTART_AGREEMENT``) of
+* the run stops after a polish round (``_Stopping``) when at least ``agreement`` (2) of
   the refined candidates have settled on the goal (error at most ``SETTLED``, 1e-14 m) with
   the best motion time (independent starting points agreeing), or when the best F has
   improved by less than ``tol`` for ``patience_rounds`` rounds (three times as many while the
@@ -57,9 +58,9 @@ Additions of ours, documented in the README, each on by default because it measu
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
   tuning runs); ``curve_search=0`` turns it off. On arms with other numbers of planned joints
   (``_by_multistart``) a multi-start polish from ``WIDE_PROBES`` times as many screened probes
-  and every swarm's p_g (``_multistart``) takes its place where the solutions form no curves
-  (isolated solutions, sets of two or more dimensions) and joins it on the longer curves of
-  six planned joints;
+  and the polish round's candidates (``_multistart``) takes its place where the solutions
+  form no curves (isolated solutions, sets of two or more dimensions) and joins it on the
+  longer curves of six planned joints;
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -114,7 +115,12 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 #: hardest set (Panda, 99.3 % to 99.0 % within 0.1 % of the reference).
 #: ``MULTISTART_VERTEX_STEPS``: the first polish's first steps try only the vertex sets of the
 #: SQP step (``polish``): Panda median 19 % lower, SO-101 and UR5 4 %; 9 goals of 1800 dev
-#: goals (five arms and start kinds) missed against 8.
+#: goals (five arms and start kinds) missed against 8. ``ROUND_TRUST``: the trust radius (rad)
+#: of the swarms' candidates there, the polish round's. The multi-start takes the place of the
+#: polish round (it used to follow one): on 1920 free-mode dev goals (SO-101, UR5, Panda,
+#: xArm7) the median fell from 21 to 17 ms (SO-101, UR5) and from 36 to 30 ms (Panda, xArm7),
+#: and 11 goals were missed against 9 (the misses vary by about as much with the random
+#: draws alone); in radial mode 9 to 11 % faster, with the same misses on 410 dev goals.
 WIDE_PROBES = 3
 SCREENED = 3
 SCREEN_ERROR = 1e-6
@@ -124,14 +130,7 @@ FINISH_STEPS = 30
 PROJECT_STEPS = 8
 MULTISTART_PRUNED = (6, 24)
 MULTISTART_VERTEX_STEPS = 4
-
-#: ``agreement`` where the multi-start follows the swarm phase (``_by_multistart``): it
-#: searches the solutions from every swarm's p_g and many probes, so the swarm phase ends once
-#: one refined candidate has settled on the goal. With 2 it ran 1.7 to 2.4 polish rounds on
-#: average on the SO-101, UR5 and Panda in free mode; with 1 the share of goals within 0.1 % of
-#: the bench's reference stayed the same on 1000 tuning goals (four arms), the median plan
-#: time fell by up to 27 % and the p99 by up to 47 %.
-MULTISTART_AGREEMENT = 1
+ROUND_TRUST = 0.5
 
 #: Trust radius (rad) above which a candidate in a polish round still counts as converging
 #: (``_polish_is_enough``): a fifth of the polish's, after three rejected steps in a row.
@@ -316,6 +315,14 @@ def _evaluate(swarm: _Swarms, obj: Objective) -> int:
     return swarm.f.size
 
 
+def _round_members(swarm: _Swarms, rng: np.random.Generator, count: int) -> np.ndarray:
+    """Return each swarm's p_g and ``count - 1`` random members' p_i, (swarms count, dim)."""
+    swarms, population, dim = swarm.x.shape
+    members = np.concatenate((swarm.gbest_index[:, None],
+                              rng.integers(0, population, (swarms, count - 1))), axis=1)
+    return swarm.pbest[swarm.rows[:, None], members].reshape(-1, dim)
+
+
 def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, count: int,
                   steps: int, enough: _Enough) -> Evaluation:
     """
@@ -324,11 +331,9 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
     The best refined candidate of each swarm replaces its p_g, and that particle's position,
     where it is better. Return the evaluation of all refined candidates.
     """
-    swarms, population, dim = swarm.x.shape
-    members = np.concatenate((swarm.gbest_index[:, None],
-                              rng.integers(0, population, (swarms, count - 1))), axis=1)
-    refined = polish_candidates(obj, swarm.pbest[swarm.rows[:, None], members].reshape(-1, dim),
-                                max_steps=steps, enough=enough)
+    swarms, _, dim = swarm.x.shape
+    refined = polish_candidates(obj, _round_members(swarm, rng, count), max_steps=steps,
+                                trust=ROUND_TRUST, enough=enough)
     ev = obj(refined)
     refined_f = ev.efficiency.reshape(swarms, -1)
     pick = np.argmin(refined_f, axis=1)
@@ -342,7 +347,7 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
 
 
 def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, probes: int,
-                  steps: int) -> None:
+                  steps: int, count: int) -> None:
     """
     Polish the seeds along the solution curves (``solution_curve``); keep a better one (ours).
 
@@ -354,8 +359,9 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     once one has settled on the goal and no candidate still converging could beat it
     (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``,
     ``_along_curves``). Where ``_by_multistart``, ``_multistart`` polishes ``WIDE_PROBES``
-    times ``probes`` screened probes and every swarm's p_g, instead of the seeds where the
-    solutions form no curves, beside them on curves of six planned joints.
+    times ``probes`` screened probes and a polish round's candidates (each swarm's p_g and
+    ``count - 1`` random members' p_i), instead of the seeds where the solutions form no
+    curves, beside them on curves of six planned joints.
     """
     s = swarm.best_swarm()
     best = _answer(swarm, obj)
@@ -363,7 +369,8 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     reached = bool(here.error[0] <= ON_GOAL)
     polished = np.empty((0, best.size))
     if _by_multistart(obj):
-        polished = _multistart(obj, swarm.gbest, _probes(obj, rng, probes * WIDE_PROBES),
+        members = _round_members(swarm, rng, count)
+        polished = _multistart(obj, members, _probes(obj, rng, probes * WIDE_PROBES),
                                2 * steps)
     if curve_constraint(obj) is not None:
         polished = np.concatenate((polished, _along_curves(obj, rng, best, reached, probes,
@@ -430,13 +437,14 @@ def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
 def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int
                 ) -> np.ndarray:
     """
-    Return the swarms' bests and the most promising probes polished, the fastest further (ours).
+    Return the swarms' candidates and the best probes polished, the fastest further (ours).
 
     Where the curve search does not serve (``_by_multistart``). The probes are screened: each
     is projected onto the solutions (``PROJECT_STEPS`` Newton steps), and the ``SCREENED``-th
-    part whose projections are fastest on the goal is kept. The swarms' p_g and the kept probes
-    (as drawn: the polish from there, with steps as long as ``WIDE_TRUST``, reaches more of
-    the fast minima than from the projections) are polished ``steps`` steps (pruned to the best
+    part whose projections are fastest on the goal is kept. The swarms' candidates ``bests``
+    (with a polish round's trust radius, ``ROUND_TRUST``) and the kept probes (as drawn: the
+    polish from there, with steps as long as ``WIDE_TRUST``, reaches more of the fast minima
+    than from the projections) are polished ``steps`` steps (pruned to the best
     after a few, ``MULTISTART_PRUNED``), then the ``FINISHED`` fastest on the goal
     ``FINISH_STEPS`` steps more.
     """
@@ -444,7 +452,8 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     ev = obj(projected)
     keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
     points = np.concatenate((bests, probes[keep[: len(probes) // SCREENED]]))
-    first = polish_candidates(obj, points, max_steps=steps, trust=WIDE_TRUST,
+    trust = np.where(np.arange(len(points)) < len(bests), ROUND_TRUST, WIDE_TRUST)
+    first = polish_candidates(obj, points, max_steps=steps, trust=trust,
                               prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS)
     ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > ON_GOAL))[:FINISHED]
@@ -527,20 +536,17 @@ class _Stopping:
 
 def _settings(obj: Objective, population: int, max_iter: int, polish_period: int,
               swarms: int | None, polish_count: int | None, polish_steps: int | None,
-              agreement: int | None, curve_search: int) -> tuple[int, int, int, int]:
+              agreement: int | None) -> tuple[int, int, int, int]:
     """
     Return ``swarms``, ``polish_count``, ``polish_steps`` and ``agreement``; defaults for None.
 
-    By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement``
-    ``MULTISTART_AGREEMENT`` where the multi-start follows the swarm phase
-    (``_by_multistart``), 2 elsewhere.
+    By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement`` 2.
     """
     defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
     swarms = defaults['swarms'] if swarms is None else swarms
     polish_count = defaults['polish_count'] if polish_count is None else polish_count
     polish_steps = defaults['polish_steps'] if polish_steps is None else polish_steps
-    if agreement is None:
-        agreement = MULTISTART_AGREEMENT if curve_search and _by_multistart(obj) else 2
+    agreement = 2 if agreement is None else agreement
     if population < 2 or swarms < 1 or max_iter < 1 or polish_count < 1 or polish_period < 1:
         raise ValueError('population must be >= 2; swarms, max_iter, polish_count and '
                          'polish_period >= 1')
@@ -562,15 +568,12 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``), ``agreement`` to ``MULTISTART_AGREEMENT`` where the multi-start
-    follows (``_by_multistart``, ``curve_search`` on) and to 2 elsewhere. Without ``polish``
-    this is the paper's algorithm alone, stopped by ``History.stalled``. ``interrupt`` is
-    asked after every iteration the stopping rule has not ended; its reason ends the run with
-    the best answer so far (see the module docstring).
+    ``RADIAL_DEFAULTS``), ``agreement`` to 2. Without ``polish`` this is the paper's algorithm
+    alone, stopped by ``History.stalled``. ``interrupt`` is asked after every iteration the
+    stopping rule has not ended; its reason ends the run with the best answer so far.
     """
     swarms, polish_count, polish_steps, agreement = _settings(
-        obj, population, max_iter, polish_period, swarms, polish_count, polish_steps, agreement,
-        curve_search)
+        obj, population, max_iter, polish_period, swarms, polish_count, polish_steps, agreement)
     rng = np.random.default_rng(seed)
     vmax = max_velocity * (obj.upper - obj.lower)
     eliminated = int(round(elimination * population))
@@ -587,7 +590,11 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
         if eliminated and (it + 1) % elimination_period == 0:
             _last_elimination(swarm, rng, obj.lower, obj.upper, eliminated)
         nfev += _evaluate(swarm, obj)
-        if polish and (it + 1) % polish_period == 0:        # ours: see the module docstring
+        if polish and (it + 1) % polish_period == 0 and curve_search and _by_multistart(obj):
+            # ours: no polish round, the multi-start polishes its candidates (module docstring)
+            _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
+            stop, converged = True, bool(swarm.best()[1] <= obj.shaping.eps)
+        elif polish and (it + 1) % polish_period == 0:      # ours: see the module docstring
             refined = _polish_round(swarm, obj, rng, polish_count, polish_steps,
                                     _polish_is_enough(agreement, obj.arm.reach / 8))
             # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so
@@ -597,7 +604,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
             if stop:
                 converged = reached
                 if curve_search:
-                    _curve_search(swarm, obj, rng, curve_search, polish_steps)
+                    _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
             elif restart:
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())

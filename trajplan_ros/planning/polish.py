@@ -459,7 +459,8 @@ def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
     return step * np.minimum(1.0, radius / np.maximum(size, 1e-300))[..., None]
 
 
-def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float = 0.5,
+def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
+           trust: float | np.ndarray = 0.5,
            enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None,
            prune: tuple[int, int] | None = None, vertex_steps: int = 0) -> np.ndarray:
     """
@@ -468,9 +469,10 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     ``enough(time, error, radius)``, if given, is asked after every step and ends the polish
     early when it returns True (each candidate's motion time, s, constraint error, m, and trust
     radius, rad: halved or less by each rejected step, doubled by each accepted one up to
-    ``trust``, and 0 once converged). A candidate has converged when its radius falls to
-    ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also when it is on the solutions and its
-    steps were rejected ``_STALLED`` times in a row (it then takes no more steps).
+    ``trust``, one for all candidates or one each, and 0 once converged). A candidate has
+    converged when its radius falls to ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also
+    when it is on the solutions and its steps were rejected ``_STALLED`` times in a row (it
+    then takes no more steps).
     ``prune`` = (steps, count), if given: after that many steps, only the ``count`` candidates
     of least merit take further steps; the others are returned where they are. On sets of 2+
     dimensions the first ``vertex_steps`` SQP steps try only the vertex sets of
@@ -483,14 +485,14 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
     weight = 1e3 / obj.arm.reach
     here = Linearisation(obj, x, weight)
     wide = here.null.shape[1] > 1           # a set of solutions of 2 or more dimensions
-    delta = np.full(k, trust)               # the trust radii; 0 once converged
+    trust = np.broadcast_to(np.asarray(trust, dtype=float), (k,))
+    delta = trust.copy()                    # the trust radii; 0 once converged
     rows = np.arange(k)                     # the candidates that take steps
     rejected = np.zeros(k, dtype=int)
     time, error = here.time.copy(), here.error.copy()
     for step in range(max_steps):
         if prune is not None and step == prune[0] and len(rows) > prune[1]:
-            best = np.zeros(len(rows), dtype=bool)
-            best[np.argsort(here.merit, kind='stable')[: prune[1]]] = True
+            best = np.isin(np.arange(len(rows)), np.argsort(here.merit, kind='stable')[: prune[1]])
             delta[rows[~best]] = 0.0
             rows = rows[best]
             here.take(best)
@@ -503,7 +505,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30, trust: float =
         here.keep(there, accept)
         # a rejected step shrinks the radius below its own length: the same trial again
         # would be rejected again
-        delta[rows] = np.where(accept, np.minimum(2 * radius, trust),
+        delta[rows] = np.where(accept, np.minimum(2 * radius, trust[rows]),
                                np.minimum(radius, moved) / 2)
         converged = delta[rows] <= _SMALLEST_RADIUS
         time[rows], error[rows] = here.time, here.error
