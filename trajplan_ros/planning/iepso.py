@@ -108,19 +108,17 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 #: per ``curve_search`` point, probes drawn per probe polished, the error (in arm reaches) up
 #: to which a projected probe counts as on the goal in that screening, the first polish's trust
 #: radius (rad), and how many of the fastest polished probes are polished further, for how
-#: many steps. ``MULTISTART_PRUNED``: after that many steps of the first polish only that many
-#: candidates (of least merit) go on. On 600 free-mode dev goals (SO-101, UR5, Panda) the one
-#: that gave the multi-start's answer ranked 24th or worse at step 6 on 2, at step 4 on 8;
-#: pruning at step 6 to 24 cut the median by 9 to 17 % and missed one more goal of 400 on the
-#: hardest set (Panda, 99.3 % to 99.0 % within 0.1 % of the reference).
-#: ``MULTISTART_VERTEX_STEPS``: the first polish's first steps try only the vertex sets of the
-#: SQP step (``polish``): Panda median 19 % lower, SO-101 and UR5 4 %; 9 goals of 1800 dev
-#: goals (five arms and start kinds) missed against 8. ``ROUND_TRUST``: the trust radius (rad)
-#: of the swarms' candidates there, the polish round's. The multi-start takes the place of the
-#: polish round (it used to follow one): on 1920 free-mode dev goals (SO-101, UR5, Panda,
-#: xArm7) the median fell from 21 to 17 ms (SO-101, UR5) and from 36 to 30 ms (Panda, xArm7),
-#: and 11 goals were missed against 9 (the misses vary by about as much with the random
-#: draws alone); in radial mode 9 to 11 % faster, with the same misses on 410 dev goals.
+#: many steps; ``ROUND_TRUST``: the trust radius (rad) of the swarms' candidates there, the
+#: polish round's. The multi-start takes the place of the polish round (it used to follow
+#: one): the swarms' candidates join its first polish. ``MULTISTART_PRUNED``: after that many
+#: steps of the first polish only that many candidates (of least merit) go on;
+#: ``MULTISTART_VERTEX_STEPS``: its first steps try only the vertex sets of the SQP step
+#: (``polish``). On 1920 free-mode dev goals (SO-101, UR5, Panda, xArm7) and on six hard UR5
+#: goals planned with 9 seeds each (seed 728): the version with the round missed 7 goals and
+#: 4 of 54; without it 9 and 4, at 22 ms median on the SO-101 and UR5 and 54 ms on the Panda;
+#: with pruning to 24 after 10 steps and 3 vertex steps also 9 and 4, at 21 and 44 ms.
+#: Pruning after 6 steps and 4 vertex steps (17 and 30 ms) missed 11 goals and 16 of 54;
+#: pruning after 6 steps alone 10 of 54, 4 vertex steps alone 8.
 WIDE_PROBES = 3
 SCREENED = 3
 SCREEN_ERROR = 1e-6
@@ -128,8 +126,8 @@ WIDE_TRUST = 1.5
 FINISHED = 4
 FINISH_STEPS = 30
 PROJECT_STEPS = 8
-MULTISTART_PRUNED = (6, 24)
-MULTISTART_VERTEX_STEPS = 4
+MULTISTART_PRUNED = (10, 24)
+MULTISTART_VERTEX_STEPS = 3
 ROUND_TRUST = 0.5
 
 #: Trust radius (rad) above which a candidate in a polish round still counts as converging
