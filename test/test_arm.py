@@ -98,11 +98,14 @@ def test_curvature_matches_finite_differences(n):
     rng, arm, q = arm_and_configurations(n, 20 + n)
     direction = np.zeros_like(q)
     direction[:, : arm.planned] = rng.normal(size=(20, arm.planned))
-    pdd, udd = arm.tool_jacobian(q).curvature(direction[:, : arm.planned])
+    both = np.stack((direction, 2.0 * direction))[:, :, : arm.planned]   # two directions
+    (pdd, twice_p), (udd, twice_u) = arm.tool_jacobian(q).curvature(both)
     h = 1e-4
     (pp, up), (p0, u0), (pm, um) = (arm.tool(q + t * direction) for t in (h, 0.0, -h))
     np.testing.assert_allclose(pdd, (pp - 2 * p0 + pm) / h ** 2, atol=1e-6)
     np.testing.assert_allclose(udd, (up - 2 * u0 + um) / h ** 2, atol=1e-6)
+    np.testing.assert_allclose(twice_p, 4.0 * pdd, rtol=1e-12, atol=1e-15)   # quadratic in n
+    np.testing.assert_allclose(twice_u, 4.0 * udd, rtol=1e-12, atol=1e-15)
 
 
 def test_reach_bounds_every_tool_position():

@@ -71,25 +71,24 @@ class ToolJacobian:
 
     def curvature(self, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """
-        Return the second derivatives of p and u along joint directions n (..., N, planned).
+        Return the second derivatives of p and u along joint directions n (P, N, planned).
 
-        They are d2/dt2 at t = 0 of p(q + t n) and u(q + t n), each (..., N, 3): several
-        directions per configuration in one pass.
+        They are d2/dt2 at t = 0 of p(q + t n) and u(q + t n), each (P, N, 3): P directions per
+        configuration in one pass.
 
         The derivative of column i with respect to q_j, for j <= i (j nearer the base), is
         Z_j x J_i, so the sum over all pairs is sum_j n_j Z_j x (2 T_j - n_j J_j) with
         T_j = sum_{i >= j} n_i J_i.
         """
-        weight = np.moveaxis(n, -1, 0)                           # (planned, ..., N)
-        extra = (None,) * (n.ndim - 2)
-        turned = self.columns[(slice(None), slice(None), 2) + extra] * weight    # n_j Z_j
+        weight = n.transpose(2, 0, 1)                            # (planned, P, N)
+        turned = self.columns[:, :, 2, None] * weight            # n_j Z_j, (3, planned, P, N)
         # regrouped by column i: sum_i n_i (2 W_i - n_i Z_i) x J_i
         # with W_i = sum_{j <= i} n_j Z_j
         a = (np.cumsum(2.0 * turned, axis=1) - turned)[:, :, None]
-        jac = self.columns[(slice(None), slice(None), slice(0, 2)) + extra]
+        jac = self.columns[:, :, :2, None]                       # (3, planned, 2, 1, N)
         cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]    # coordinates first
-        second = np.einsum('cik...,i...->ck...', cross, weight)  # (3, 2, ..., N)
-        return np.moveaxis(second[:, 0], 0, -1), np.moveaxis(second[:, 1], 0, -1)
+        second = np.einsum('cikpn,ipn->ckpn', cross, weight)     # (3, 2, P, N)
+        return second[:, 0].transpose(1, 2, 0), second[:, 1].transpose(1, 2, 0)
 
 
 _NEXT, _LAST = [1, 2, 0], [2, 0, 1]      # (a x b)_c = a_{c+1} b_{c+2} - a_{c+2} b_{c+1}

@@ -48,6 +48,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from trajplan_ros.kinematics.arm import ToolJacobian
 from trajplan_ros.planning.objective import Objective
 
 __all__ = ['Linearisation', 'polish', 'settle']
@@ -367,14 +368,20 @@ class Linearisation:
         else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.quad = np.zeros((k, free, free, dim))
-        if free:        # every direction and every pair of directions in one pass
+        if free == 1:
+            self.quad[:, 0, 0] = self._second(obj, d, self.null.transpose(1, 0, 2))[0]
+        elif free:      # every direction and every pair of directions in one pass
             a, b = _pairs(free)
-            both = np.concatenate((self.null, self.null[:, a] + self.null[:, b]), axis=1)
-            half = 0.5 * self.newton(obj.linear_residuals(*d.curvature(np.swapaxes(both, 0, 1))))
+            half = self._second(obj, d, np.concatenate(
+                (self.null, self.null[:, a] + self.null[:, b]), axis=1).transpose(1, 0, 2))
             diagonal = np.arange(free)
-            self.quad[:, diagonal, diagonal] = np.swapaxes(half[:free], 0, 1)
-            self.quad[:, a, b] = self.quad[:, b, a] = np.swapaxes(
-                0.5 * half[free:] - 0.5 * (half[a] + half[b]), 0, 1)
+            self.quad[:, diagonal, diagonal] = half[:free].transpose(1, 0, 2)
+            self.quad[:, a, b] = self.quad[:, b, a] = (
+                0.5 * half[free:] - 0.5 * (half[a] + half[b])).transpose(1, 0, 2)
+
+    def _second(self, obj: Objective, d: ToolJacobian, n: np.ndarray) -> np.ndarray:
+        """Return half the second derivative of the solutions along directions n (P, K, dim)."""
+        return 0.5 * self.newton(obj.linear_residuals(*d.curvature(n)))
 
     def newton(self, res: np.ndarray) -> np.ndarray:
         """Minimum-norm steps dx (..., K, planned): J dx = -res (least squares off its range)."""
