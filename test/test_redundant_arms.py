@@ -11,7 +11,7 @@ from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import iepso as iepso_module, plan
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
-                                          _pieces, _sqp_steps, _WALLS, polish)
+                                          _pieces, _sqp_steps, _WALLS, Linearisation, polish)
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -127,8 +127,7 @@ def test_pruned_candidates_stop_where_they_are_and_the_best_go_on(name: str) -> 
     obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
     x0 = rng.uniform(obj.lower, obj.upper, (6, obj.arm.planned))
     after = polish(obj, x0, max_steps=2, trust=1.5)
-    weight = 1e3 / arm.reach
-    merit = obj.motion_time(after) * obj.omega + weight * obj.errors(*obj.tool(after))
+    merit = Linearisation(obj, after, 1e3 / arm.reach).merit         # the polish's merit
     best = np.sort(np.argsort(merit)[:2])
     pruned = polish(obj, x0, max_steps=8, trust=1.5, prune=(2, 2))
     rest = np.setdiff1d(np.arange(6), best)
@@ -183,3 +182,17 @@ def test_the_multistart_takes_the_place_of_the_polish_round() -> None:
         result = iepso_module.iepso(obj, seed=0, polish_period=5)
     assert result.nit == 5 and not rounds
     assert result.converged and result.error <= 1e-9
+
+
+@pytest.mark.parametrize('name', ['so101', 'ur5'])
+def test_a_trust_radius_per_candidate_is_as_if_polished_apart(name: str) -> None:
+    arm = published(name)
+    rng = np.random.default_rng(7)
+    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    x0 = rng.uniform(obj.lower, obj.upper, (2, obj.arm.planned))
+    both = polish(obj, x0, max_steps=5, trust=np.array([0.5, 1.5]))
+    for row, trust in ((0, 0.5), (1, 1.5)):
+        alone = polish(obj, x0[row:row + 1], max_steps=5, trust=trust)[0]
+        np.testing.assert_allclose(both[row], alone, rtol=0, atol=1e-12)
+    assert not np.allclose(polish(obj, x0, max_steps=5, trust=0.5)[1], both[1])

@@ -33,9 +33,10 @@ Additions of ours, documented in the README, each on by default because it measu
   member often lands on a solution branch the swarm has not settled on) are refined by
   ``polish.polish`` (exact reach, least motion time along the solutions, at most
   ``polish_steps`` steps: 6); the best refined one goes back into its swarm, which carries on
-  from there. Where the multi-start follows (``_by_multistart``, below) there is no separate
-  round: the run stops after the first ``polish_period`` iterations and the multi-start
-  polishes those same candidates among its probes;
+  from there. Where the multi-start follows (``_by_multistart``, below) it takes the place of
+  the first round: after the first ``polish_period`` iterations it polishes those same
+  candidates among its probes, and the run stops if the goal is reached (else polish rounds
+  follow as elsewhere, and the multi-start again once they stop);
 * swarm-level last-elimination (``restart``, ``_restart``): after a polish round, swarms whose
   best is worse than the overall best by more than ``tol`` are drawn anew;
 * the run stops after a polish round (``_Stopping``) when at least ``agreement`` (2) of
@@ -70,7 +71,8 @@ Additions of ours, documented in the README, each on by default because it measu
   best answer so far (``OptimizeResult.interrupted``). Asking draws no random numbers, so a run
   it never ends is bit-identical. Between two asks there is one iteration and at most one polish
   round: a few milliseconds with the defaults (the curve search, as short, runs only once the
-  stopping rule has fired);
+  stopping rule has fired; the multi-start, in place of the first round, takes tens of
+  milliseconds on arms of 6 or 7 joints);
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   could beat it: one not settled yet that is faster, or a settled one within 1 % that is still
@@ -344,6 +346,17 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
     return ev
 
 
+def _round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, stopping: _Stopping,
+           count: int, steps: int) -> tuple[bool, bool]:
+    """Run a polish round and ask the stopping rule; return (stop, goal reached) (ours)."""
+    refined = _polish_round(swarm, obj, rng, count, steps,
+                            _polish_is_enough(stopping.agreement, obj.arm.reach / 8))
+    # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement is
+    # judged on the motion time of the candidates settled on the goal
+    agree, _ = _agreeing(refined.motion_time, refined.error)
+    return stopping.after_round(*swarm.best(), agree)
+
+
 def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, probes: int,
                   steps: int, count: int) -> None:
     """
@@ -351,30 +364,43 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
 
     The curves are those through the answer so far and through ``probes`` points drawn inside
     the limits. A polished seed that ``_fastest`` prefers to the answer (or, while the goal is
-    not reached, one with a lower F) replaces the best swarm's p_g. The seeds get four times
-    the polish steps of a round (they may start a little off the solutions and far along them
-    from their minimum, and near a straight elbow the polish converges only linearly), end early
+    not reached, one with a lower F) replaces the best swarm's p_g (``_keep_fastest``). The
+    seeds get four times the polish steps of a round (they may start a little off the
+    solutions and far along them from their minimum, and near a straight elbow the polish
+    converges only linearly), end early
     once one has settled on the goal and no candidate still converging could beat it
     (``_polish_is_enough``), and are settled by plain Newton steps (``polish.settle``,
     ``_along_curves``). Where ``_by_multistart``, ``_multistart`` polishes ``WIDE_PROBES``
     times ``probes`` screened probes and a polish round's candidates (each swarm's p_g and
     ``count - 1`` random members' p_i), instead of the seeds where the solutions form no
-    curves, beside them on curves of six planned joints.
+    curves, before them on curves of six planned joints (so that the curves run through its
+    answer).
     """
-    s = swarm.best_swarm()
-    best = _answer(swarm, obj)
-    here = obj(best[None, :])
-    reached = bool(here.error[0] <= ON_GOAL)
-    polished = np.empty((0, best.size))
     if _by_multistart(obj):
         members = _round_members(swarm, rng, count)
-        polished = _multistart(obj, members, _probes(obj, rng, probes * WIDE_PROBES),
-                               2 * steps)
+        probed = _probes(obj, rng, probes * WIDE_PROBES)
+        _keep_fastest(swarm, obj, _multistart(obj, members, probed, 2 * steps))
     if curve_constraint(obj) is not None:
-        polished = np.concatenate((polished, _along_curves(obj, rng, best, reached, probes,
-                                                           steps)))
+        best = _answer(swarm, obj)
+        here = obj(best[None, :])
+        _keep_fastest(swarm, obj, _along_curves(obj, rng, best, bool(here.error[0] <= ON_GOAL),
+                                                probes, steps), best, here)
+
+
+def _keep_fastest(swarm: _Swarms, obj: Objective, polished: np.ndarray,
+                  best: np.ndarray | None = None, here: Evaluation | None = None) -> None:
+    """
+    Put the polished candidate ``_fastest`` prefers to the answer in the best swarm (ours).
+
+    Or, while the answer does not reach the goal, one with a lower F. ``best`` and ``here``:
+    the answer and its evaluation, if the caller has them.
+    """
     if not len(polished):
         return
+    if best is None or here is None:
+        best = _answer(swarm, obj)
+        here = obj(best[None, :])
+    reached = bool(here.error[0] <= ON_GOAL)
     found = np.concatenate((best[None, :], polished))
     ev = obj(polished)
     efficiency = np.concatenate((here.efficiency, ev.efficiency))
@@ -382,7 +408,7 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     i = _fastest(obj, found, error)
     i = int(np.argmin(efficiency)) if i is None else i
     if i > 0 and (reached or efficiency[i] < efficiency[0]):
-        swarm.replace_gbest(s, found[i], efficiency[i], error[i])
+        swarm.replace_gbest(swarm.best_swarm(), found[i], efficiency[i], error[i])
 
 
 def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, reached: bool,
@@ -579,7 +605,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     nfev = swarm.f.size
     history = History(max_iter, tol, patience=50, eps=obj.shaping.eps)
     stopping = _Stopping(tol, patience_rounds, agreement, obj.shaping.eps)
-    stop, converged, interrupted = False, False, None
+    stop, converged, interrupted, searched = False, False, None, False
     for it in range(max_iter):
         # the paper's iteration: eq. (3)-(5) and last-elimination, with w and c3 scheduled
         frac = it / max(max_iter - 1, 1)
@@ -588,22 +614,17 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
         if eliminated and (it + 1) % elimination_period == 0:
             _last_elimination(swarm, rng, obj.lower, obj.upper, eliminated)
         nfev += _evaluate(swarm, obj)
-        if polish and (it + 1) % polish_period == 0 and curve_search and _by_multistart(obj):
-            # ours: no polish round, the multi-start polishes its candidates (module docstring)
-            _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
-            stop, converged = True, bool(swarm.best()[1] <= obj.shaping.eps)
-        elif polish and (it + 1) % polish_period == 0:      # ours: see the module docstring
-            refined = _polish_round(swarm, obj, rng, polish_count, polish_steps,
-                                    _polish_is_enough(agreement, obj.arm.reach / 8))
-            # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so
-            # agreement is judged on the motion time of the candidates settled on the goal
-            agree, _ = _agreeing(refined.motion_time, refined.error)
-            stop, reached = stopping.after_round(*swarm.best(), agree)
-            if stop:
-                converged = reached
-                if curve_search:
+        if polish and (it + 1) % polish_period == 0:        # ours: see the module docstring
+            if curve_search and _by_multistart(obj) and not searched:    # in place of a round
+                _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
+                stop = converged = bool(swarm.best()[1] <= obj.shaping.eps)
+                searched = True
+            else:
+                stop, reached = _round(swarm, obj, rng, stopping, polish_count, polish_steps)
+                converged = stop and reached
+                if stop and curve_search:
                     _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
-            elif restart:
+            if not stop and restart:
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())
         if not polish and history.stalled():

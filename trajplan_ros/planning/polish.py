@@ -479,17 +479,15 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     ``trust``, one for all candidates or one each, and 0 once converged). A candidate has
     converged when its radius falls to ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also
     when it is on the solutions and its steps were rejected ``_STALLED`` times in a row (it
-    then takes no more steps).
-    ``prune`` = (steps, count), if given: after that many steps, only the ``count`` candidates
-    of least merit take further steps; the others are returned where they are. On sets of 2+
-    dimensions the first ``vertex_steps`` SQP steps try only the vertex sets of
-    ``_active_set_minimax`` (far from a minimum, the step that counts).
+    then takes no more steps). ``prune`` = (steps, count): after that many steps only the
+    ``count`` candidates of least merit that have not converged take more steps; the others
+    are returned where they are. On sets of 2+ dimensions the first ``vertex_steps`` SQP
+    steps try only the vertex sets of ``_active_set_minimax`` (far from a minimum, the step
+    that counts).
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k = x.shape[0]
-    # Penalty on |c| (metres, and the dimensionless axis residual): larger than any Lagrange
-    # multiplier of this problem, so that the merit's minimum is the constrained one.
-    weight = 1e3 / obj.arm.reach
+    weight = 1e3 / obj.arm.reach    # on |c|: above any Lagrange multiplier here (exact penalty)
     here = Linearisation(obj, x, weight)
     wide = here.null.shape[1] > 1           # a set of solutions of 2 or more dimensions
     trust = np.broadcast_to(np.asarray(trust, dtype=float), (k,))
@@ -499,7 +497,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     time, error = here.time.copy(), here.error.copy()
     for step in range(max_steps):
         if prune is not None and step == prune[0] and len(rows) > prune[1]:
-            best = np.isin(np.arange(len(rows)), np.argsort(here.merit, kind='stable')[: prune[1]])
+            moving = np.where(delta[rows] > 0.0, here.merit, np.inf)      # converged: done
+            best = np.isin(np.arange(len(rows)), np.argsort(moving, kind='stable')[: prune[1]])
             delta[rows[~best]] = 0.0
             rows = rows[best]
             here.take(best)
