@@ -468,9 +468,9 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     part whose projections are fastest on the goal is kept. The swarms' candidates ``bests``
     (with a polish round's trust radius, ``ROUND_TRUST``) and the kept probes (as drawn: the
     polish from there, with steps as long as ``WIDE_TRUST``, reaches more of the fast minima
-    than from the projections) are polished ``steps`` steps (pruned to the best
-    after a few, ``MULTISTART_PRUNED``), then the ``FINISHED`` fastest on the goal
-    ``FINISH_STEPS`` steps more.
+    than from the projections) are polished ``steps`` steps (vertex steps first,
+    ``MULTISTART_VERTEX_STEPS``; the batch cut near the end, ``MULTISTART_PRUNED``), then the
+    ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more.
     """
     projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
     ev = obj(projected)
