@@ -21,6 +21,12 @@ def published(name: str) -> ArmModel:
     return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link)
 
 
+def drawn_goal(arm: ArmModel, rng: np.random.Generator) -> Objective:
+    """Return the objective of the tool position of a random in-limit pose, from another."""
+    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+    return Objective(arm, arm.tool(q[:1])[0][0], q[1])
+
+
 @pytest.mark.parametrize('vertex_only', [False, True])
 @pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
 def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: int,
@@ -105,8 +111,7 @@ def test_the_polish_finds_the_local_minimum_it_starts_near(name: str) -> None:
     for _ in range(8):
         best = None
         while best is None:
-            q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
-            obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+            obj = drawn_goal(arm, rng)
             best = local_minimax(obj, rng.uniform(obj.lower, obj.upper))
         x0 = np.clip(best + rng.normal(0.0, 0.05, best.shape), obj.lower, obj.upper)
         x = polish(obj, x0[None], max_steps=40)[0]
@@ -123,8 +128,7 @@ def test_pruned_candidates_stop_where_they_are_and_the_best_go_on(name: str) -> 
     """After ``prune`` = (s, c) steps only the c candidates of least merit take more steps."""
     arm = published(name)
     rng = np.random.default_rng(5)
-    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
-    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    obj = drawn_goal(arm, rng)
     x0 = rng.uniform(obj.lower, obj.upper, (6, obj.arm.planned))
     after = polish(obj, x0, max_steps=2, trust=1.5)
     merit = Linearisation(obj, after, 1e3 / arm.reach).merit         # the polish's merit
@@ -172,8 +176,7 @@ def test_the_multistart_takes_the_place_of_the_polish_round() -> None:
     """Where the multi-start follows, the swarms run one polish period and no round."""
     arm = published('so101')
     rng = np.random.default_rng(11)
-    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
-    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    obj = drawn_goal(arm, rng)
     rounds = []
     original = iepso_module._polish_round
     with pytest.MonkeyPatch.context() as patch:
@@ -188,8 +191,7 @@ def test_the_multistart_takes_the_place_of_the_polish_round() -> None:
 def test_a_trust_radius_per_candidate_is_as_if_polished_apart(name: str) -> None:
     arm = published(name)
     rng = np.random.default_rng(7)
-    q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
-    obj = Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    obj = drawn_goal(arm, rng)
     x0 = rng.uniform(obj.lower, obj.upper, (2, obj.arm.planned))
     both = polish(obj, x0, max_steps=5, trust=np.array([0.5, 1.5]))
     for row, trust in ((0, 0.5), (1, 1.5)):

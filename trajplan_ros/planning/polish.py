@@ -368,7 +368,7 @@ class Linearisation:
         else:           # the columns of a complete QR of J^T beyond its rows span the null space
             self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
         self.quad = np.zeros((k, free, free, dim))
-        if free == 1:
+        if free == 1:   # no pairs: the plain path (curves, the paper arm's hot path)
             self.quad[:, 0, 0] = self._second(obj, d, self.null.transpose(1, 0, 2))[0]
         elif free:      # every direction and every pair of directions in one pass
             a, b = _pairs(free)
