@@ -33,6 +33,25 @@ def test_radial_error_vanishes_only_at_radial_solutions():
     assert obj(free).error[0] > 1e-3
 
 
+def test_fewer_axis_conditions_leave_the_axis_freer():
+    # across = 1: the axis held in the plane of the goal ray and the second vector across it;
+    # the error is the angle out of that plane. across = 0: the position alone.
+    x = np.random.default_rng(1).uniform(ARM.lower[:4], ARM.upper[:4], (8, 4))
+    full, one, none = (Objective(ARM, TARGET, np.zeros(5), mode='radial', across=n)
+                       for n in (2, 1, 0))
+    p, u = full.tool(x)
+    assert [o.residuals(p, u).shape[1] for o in (full, one, none)] == [5, 4, 3]
+    out_of_plane = np.arcsin(np.abs(u @ full.ray_basis[1]))
+    np.testing.assert_allclose(one.errors(p, u) ** 2,
+                               none.errors(p, u) ** 2 + (ARM.reach * out_of_plane) ** 2)
+    np.testing.assert_allclose(none.errors(p, u), np.linalg.norm(p - TARGET, axis=1))
+    in_plane = u - np.outer(u @ full.ray_basis[1], full.ray_basis[1])
+    assert np.all(one.errors(p, in_plane / np.linalg.norm(in_plane, axis=1)[:, None])
+                  <= none.errors(p, u) + 1e-12)
+    with pytest.raises(ValueError, match='across'):
+        Objective(ARM, TARGET, np.zeros(5), mode='radial', across=3)
+
+
 def test_vectorised_over_particles():
     obj = Objective(ARM, TARGET, np.zeros(5))
     x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (64, 4))

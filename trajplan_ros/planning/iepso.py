@@ -46,22 +46,23 @@ Additions of ours, documented in the README, each on by default because it measu
   goal is not reached; the paper's convergence precision), or after ``max_iter`` iterations.
   F itself is not compared for agreement: eq. (17) changes it by 0.024 per picometre of
   error, far below any meaningful difference;
-* a curve search (``_curve_search``) once the run stops, on arms with four planned joints,
-  where the solutions form curves (one free direction in free mode; in radial mode through the
-  curves of the position constraint alone): ``solution_curve`` follows the
+* a curve search (``_curve_search``) once the run stops, where the solutions form curves
+  (one free direction: free mode on four planned joints, radial on six) or lie on them
+  (radial mode on four or five: the curves of the position and fewer axis conditions,
+  ``curve_constraint``): ``solution_curve`` follows the
   curves through the answer and through ``curve_search`` (20) points drawn inside the limits,
   both ways through the limits, and returns the points where the motion time is least along
-  them (on position-only curves, where the tool axis comes nearest the goal ray), where they
-  enter, leave or just touch the limits, and, ten times as finely sampled, near the answer.
+  them (on the curves of fewer axis conditions, where the tool axis comes nearest the goal
+  ray), where they enter, leave or just touch the limits, and, ten times as finely sampled,
+  near the answer.
   The polish refines the seeds that could be faster than the answer (ending early like a
   polish round, below, once one has settled), and the fastest replaces it. This finds the
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
-  tuning runs); ``curve_search=0`` turns it off. On arms with other numbers of planned joints
-  (``_by_multistart``) a multi-start polish from ``WIDE_PROBES`` times as many screened probes
-  and the polish round's candidates (``_multistart``) takes its place where the solutions
-  form no curves (isolated solutions, sets of two or more dimensions) and joins it on the
-  longer curves of six planned joints;
+  tuning runs); ``curve_search=0`` turns it off. Elsewhere (``_by_multistart``) a
+  multi-start polish from ``WIDE_PROBES`` times as many screened probes and the polish
+  round's candidates (``_multistart``) takes its place (isolated solutions in free mode, sets
+  of two or more dimensions) and joins it on the longer curves of six planned joints;
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -428,17 +429,22 @@ def _by_multistart(obj: Objective) -> bool:
     """
     Return whether ``_multistart`` searches the solutions after the swarm phase (ours).
 
-    Everywhere but on the curves of four planned joints, which the curve search alone serves:
-    on isolated points (as many constraints as planned joints: radial mode on five, free mode
-    on three), where a swarm lands on the fastest less surely than a multi-start Newton search
-    from many probes (on the UR5 in radial mode 19 of 250 dev goals were missed without it, 1
-    with it); on sets of two or more dimensions, which have no curve to follow; and, beside the
-    curve search, on the longer curves of six planned joints (radial mode). There the walk
-    along the curves alone missed a faster stretch on 12 of 300 Panda dev goals (2 with a walk
-    three times as long, at 34 ms), the multi-start alone an optimum on a joint limit on 4 of
-    150 (the walk's seeds include the limits), both together on 1 of 150 (31 ms).
+    Where the curve search does not serve alone: on isolated points in free mode (three
+    planned joints), where a swarm lands on the fastest less surely than a multi-start Newton
+    search from many probes; on sets of two or more dimensions (free mode on five to seven,
+    radial on seven), which have no curve to follow; and, beside the curve search, on the
+    longer curves of six planned joints (radial mode). There the walk along the curves alone
+    missed a faster stretch on 12 of 300 Panda dev goals (2 with a walk three times as long,
+    at 34 ms), the multi-start alone an optimum on a joint limit on 4 of 150 (the walk's seeds
+    include the limits), both together on 1 of 150 (31 ms). Radial goals on four or five
+    planned joints have isolated solutions too, but they lie on the curves of fewer
+    constraints (``curve_constraint``), which the curve search follows: on the UR5 the
+    multi-start missed the fastest of its eight solutions on 1 of 50 goals (seed 735; on 6 of
+    10 plan seeds), whose basin held 1 % of its probes; the curves found it every time.
     """
-    return obj.arm.planned != 4 and obj.arm.planned >= (5 if obj.radial else 3)
+    if obj.radial:
+        return obj.arm.planned >= 6
+    return obj.arm.planned != 4 and obj.arm.planned >= 3
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:

@@ -73,13 +73,20 @@ def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
 
 
 class Objective:
-    """F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary)."""
+    """
+    F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary).
+
+    ``across`` (radial mode): how many components of the tool axis across the goal ray the
+    constraints hold at zero; 2, the axis on the ray, but for ``solution_curve``'s curves.
+    """
 
     def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
                  mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
-                 shaping: RewardPunishment | None = None) -> None:
+                 shaping: RewardPunishment | None = None, across: int = 2) -> None:
         self.arm = arm
         self.mode = Mode(mode)
+        if across not in (0, 1, 2):
+            raise ValueError(f'across must be 0, 1 or 2, got {across}')
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f'angular velocity must be finite and positive, got {omega}')
         self.omega = float(omega)
@@ -111,6 +118,10 @@ class Objective:
         self.longest_time = float(np.max((self.upper - self.lower) * self.time_scale)) / self.omega
         #: Rows: the goal ray, then two unit vectors across it (radial mode only).
         self.ray_basis = goal_ray_basis(self.goal) if self.radial else np.eye(3)
+        #: Rows: the components of the tool axis across the goal ray that the residuals hold at
+        #: zero (radial mode: both, unless ``across`` is less, none in free mode). With fewer
+        #: than both, the solutions are the larger sets that ``solution_curve`` follows.
+        self.across_basis = self.ray_basis[1: 1 + across] if self.radial else np.empty((0, 3))
         self._tail = arm.held_tail(self.start)
 
     @property
@@ -181,7 +192,7 @@ class Objective:
 
         The residuals are linear in p and u, so this also maps their derivatives.
         """
-        return np.concatenate((dp, du @ self.ray_basis[1:].T), axis=-1) if self.radial else dp
+        return np.concatenate((dp, du @ self.across_basis.T), axis=-1) if self.radial else dp
 
     def axis_angle(self, u: np.ndarray) -> np.ndarray:
         """Return the angle (rad) between each tool axis u (N, 3) and the goal ray p / |p|."""
@@ -190,11 +201,19 @@ class Objective:
         return np.arctan2(across, along)
 
     def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Return the error of eq. (11), plus the axis angle in radial mode (see the module)."""
+        """
+        Return the error of eq. (11), plus the axis angle in radial mode (see the module).
+
+        With one component held across the goal ray (``across``), the angle of u from the plane
+        that leaves it; with none, the position error alone.
+        """
         d = p - self.goal
         sq = np.einsum('ij,ij->i', d, d)
-        if self.radial:
+        if self.radial and len(self.across_basis) == 2:
             sq = sq + (self.arm.reach * self.axis_angle(u)) ** 2
+        elif self.radial and len(self.across_basis):
+            off = np.arcsin(np.minimum(np.abs(u @ self.across_basis[0]), 1.0))
+            sq = sq + (self.arm.reach * off) ** 2
         return np.sqrt(sq)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:

@@ -349,7 +349,7 @@ class Linearisation:
         size = (np.sqrt(np.einsum('kr,kr->k', self.c, self.c)) if obj.radial
                 else self.error)                             # free mode: c = p - goal
         self.merit = self.time * obj.omega + _TRAVEL_WEIGHT * travel + weight * size
-        jac = (np.concatenate((d.jp, obj.ray_basis[1:] @ d.ju), axis=1) if obj.radial
+        jac = (np.concatenate((d.jp, obj.across_basis @ d.ju), axis=1) if obj.radial
                else d.jp)
         k, rows, dim = jac.shape
         jt = np.swapaxes(jac, 1, 2)

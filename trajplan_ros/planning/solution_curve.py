@@ -24,8 +24,11 @@ them all:
    also sampled ten times as finely near it: two minima can lie closer together than a step
    (near the edge of the workspace, where the curves are small and sharply bent).
 
-Where radial solutions are isolated (four planned joints) the curve is that of the position
-constraint alone, and the seeds are where the tool axis comes nearest the goal ray instead.
+Where radial solutions are isolated (four or five planned joints) the curve is that of the
+position and of fewer conditions on the tool axis (none, or one of its two components across the
+goal ray: ``curve_constraint``), and the seeds are where the tool axis comes nearest the goal ray
+instead. Every radial solution lies on those curves, and a curve's basin is larger than an
+isolated solution's.
 """
 from __future__ import annotations
 
@@ -44,13 +47,17 @@ def curve_constraint(obj: Objective) -> Objective | None:
     Return the objective whose solutions form the curve to search, or None when there is none.
 
     That is obj itself where its constraints leave one free direction (free mode with four
-    planned joints, radial with six), the position constraint alone in radial mode with four.
+    planned joints, radial with six). In radial mode with four or five planned joints, where
+    the solutions are isolated points, it holds the position and only as many components of
+    the tool axis across the goal ray as leave one free direction (none, or one): the points
+    lie on its curves, where the axis comes nearest the goal ray.
     """
     planned = obj.arm.planned
     if planned - (5 if obj.radial else 3) == 1:
         return obj
-    if obj.radial and planned == 4:
-        return Objective(obj.arm, obj.goal, obj.start, mode=Mode.FREE, omega=obj.omega)
+    if obj.radial and planned in (4, 5):
+        return Objective(obj.arm, obj.goal, obj.start, mode=Mode.RADIAL, omega=obj.omega,
+                         across=planned - 4)
     return None
 
 
@@ -236,7 +243,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     only if a faster solution than ``best`` may lie between its neighbours (``_lowest_time``),
     and not within half a sample of ``best``. Of seeds within half a sample of each other only
     the best is kept (the same minimum, reached along the curves through different probes).
-    On the fine samples of position-only curves the
+    On the fine samples of the curves of fewer axis conditions the
     neighbours of each seed are seeds too: near a fold of the arm (an elbow almost straight)
     two radial solutions can lie within one fine sample, and Newton's method from either side
     finds each.
