@@ -469,11 +469,8 @@ class ArmModel:
         vec[:2] = tail[:, None, :]
         for i in range(top - 1, bottom - 1, -1):
             kind, r = self._kinds[i], self.rotations[i]
-            if kind == _ABOUT_X:
-                ca, sa = r[1, 1], r[2, 1]
-                y = vec[..., 1].copy()
-                vec[..., 1] = ca * y - sa * vec[..., 2]
-                vec[..., 2] = sa * y + ca * vec[..., 2]
+            if kind == _ABOUT_X:                                        # y + i z, a view
+                vec[..., 1:].view(complex)[..., 0] *= complex(r[1, 1], r[2, 1])
             elif kind == _GENERAL:
                 vec = _rotated(r, vec)
             vec[0] += self.translations[i]

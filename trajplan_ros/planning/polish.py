@@ -91,6 +91,8 @@ class _ActiveSets(NamedTuple):
     ties: np.ndarray        # (C, k + 1): 1 where the piece is a joint's displacement
     idle: np.ndarray        # (C, k + 1, k + 1): 1 on the diagonal at the unused slots
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
+    clashes: np.ndarray     # (r _WALLS, C): 1 where the set holds joint piece t and limit w,
+    #                         at row t _WALLS + w (a set that ties a joint it holds at a limit)
 
 
 @functools.lru_cache(maxsize=16)
@@ -111,8 +113,11 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
             for s in itertools.combinations(range(r), j) if s[0] == 0]
     pieces = np.array([s for s in sets if not vertex_only or r + _WALLS not in s])
     unused = pieces == r + _WALLS
+    clashes = np.array([[t in s and r + w in s for s in pieces.tolist()]
+                        for t in range(r) for w in range(_WALLS)], dtype=float)
     return _ActiveSets(pieces, (pieces < r).astype(float),
-                       unused.astype(float)[:, :, None] * np.eye(k + 1), ~unused.any(axis=1))
+                       unused.astype(float)[:, :, None] * np.eye(k + 1), ~unused.any(axis=1),
+                       clashes)
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -129,18 +134,18 @@ def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray
     k_count, k, m = null.shape
     rows_k = np.arange(k_count)[:, None]
     sign = np.where(b >= 0.0, 1.0, -1.0) * scale
-    top = np.argsort(-np.abs(b) * scale, axis=1)[:, :r]                     # (K, r)
+    size = np.abs(b) * scale
+    top = np.argsort(-size, axis=1)[:, :r]                                  # (K, r)
     walls = np.argsort(np.minimum(gap_hi, -gap_lo), axis=1)[:, :_WALLS]     # (K, 2)
-    bound = np.take_along_axis(np.where(gap_hi < -gap_lo, gap_hi, gap_lo), walls, axis=1)
-    columns = np.swapaxes(null, 1, 2)                                       # (K, m, k)
-    grad = np.concatenate(((columns * sign[:, :, None])[rows_k, top], columns[rows_k, walls],
-                           np.zeros((k_count, 1, k))), axis=1)
-    signed = np.take_along_axis(quad * sign[:, None, None, :], top[:, None, None, :], axis=3)
-    hess = 2.0 * np.concatenate((signed, np.take_along_axis(quad, walls[:, None, None, :], axis=3),
-                                 np.zeros((k_count, k, k, 1))), axis=3)
-    rhs = np.concatenate((-np.take_along_axis(np.abs(b) * scale, top, axis=1), bound,
-                          np.zeros((k_count, 1))), axis=1)
     joint = np.concatenate((top, walls, np.full((k_count, 1), -1)), axis=1)
+    # each piece's sign: the joint's for a displacement, 1 for a limit, 0 for the unused slot
+    weight = np.concatenate((sign[rows_k, top], np.ones((k_count, _WALLS)),
+                             np.zeros((k_count, 1))), axis=1)
+    grad = np.swapaxes(null, 1, 2)[rows_k, joint] * weight[:, :, None]
+    hess = (np.take_along_axis(quad, joint[:, None, None, :], axis=3)
+            * (2.0 * weight[:, None, None]))
+    near = np.where(gap_hi < -gap_lo, gap_hi, gap_lo)[rows_k, walls]
+    rhs = np.concatenate((-size[rows_k, top], near, np.zeros((k_count, 1))), axis=1)
     return grad, hess, rhs, joint
 
 
@@ -155,11 +160,11 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     (``_kkt_steps``). A set that ties a joint it also holds at a limit
     has no step (z = 0).
     """
-    pieces, ties, idle, vertex = sets
+    pieces, ties, idle, vertex, clashes = sets
     g = grad[:, pieces]                                                     # (K, C, p, k)
-    held = joint[:, pieces]                                                 # (K, C, p)
-    clash = np.any((np.where(ties > 0, held, -2)[..., :, None]
-                    == np.where((ties == 0) & (held >= 0), held, -3)[..., None, :]), axis=(2, 3))
+    r = clashes.shape[0] // _WALLS
+    at_limit = joint[:, :r, None] == joint[:, None, r: r + _WALLS]          # (K, r, _WALLS)
+    clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
     right = np.where(clash[..., None], 0.0, rhs[:, pieces])
     z = np.empty(g.shape[:2] + g.shape[3:])
     z[:, vertex] = _vertex_steps(g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
@@ -255,8 +260,11 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     pairs = (z[..., :, None] * z[..., None, :]).reshape(k_count, -1, k * k)
     step = linear + pairs @ quad.reshape(k_count, k * k, m)
     lo, hi = gap_lo[:, None, :], gap_hi[:, None, :]
-    usable = np.all((linear >= lo - 1e-12) & (linear <= hi + 1e-12), axis=2)
-    worst = np.max(np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale, axis=2)
+    # folds over the few joints: several times faster than reductions over a short last axis
+    usable = functools.reduce(np.logical_and,
+                              np.moveaxis((linear >= lo - 1e-12) & (linear <= hi + 1e-12), 2, 0))
+    moved = np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale
+    worst = functools.reduce(np.maximum, np.moveaxis(moved, 2, 0))
     return z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
 
 
