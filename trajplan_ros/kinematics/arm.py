@@ -455,7 +455,7 @@ class ArmModel:
         joint i, for each planned joint i. Per joint it applies v <- Rz(theta) (rotation v +
         translation) to every row at once (the translation only to the point): the rotation
         about z as one complex product on a complex view of the x, y coordinates, a DH link's
-        rotation about x on y and z only, any other as one matrix product, so the cost is a few
+        rotation about x likewise on y, z, any other as one matrix product, so the cost is a few
         array operations per joint whatever N is. The rows for joint i are born in its own
         frame as z x v (i v in complex form) and z, then rotated with everything else.
         q: (N, top) joint angles; columns bottom..top-1 are used.
