@@ -167,8 +167,13 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
     right = np.where(clash[..., None], 0.0, rhs[:, pieces])
     z = np.empty(g.shape[:2] + g.shape[3:])
-    z[:, vertex] = _vertex_steps(g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
-    if not vertex.all():
+    plane = g.shape[3] == 2                 # closed forms beat many tiny LAPACK calls there
+    z[:, vertex] = (_plane_vertex_steps if plane else _vertex_steps)(
+        g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
+    if not vertex.all() and plane:
+        z[:, ~vertex] = _plane_kkt_steps(hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
+                                         right[:, ~vertex], clash[:, ~vertex])
+    elif not vertex.all():
         z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
                                    idle[~vertex], right[:, ~vertex], clash[:, ~vertex])
     return np.where(np.isfinite(z), z, 0.0)
@@ -185,6 +190,66 @@ def _vertex_steps(g: np.ndarray, ties: np.ndarray, right: np.ndarray, clash: np.
     system = np.concatenate((g, np.broadcast_to(-ties[:, :, None], g.shape[:-1] + (1,))), axis=3)
     system[clash] = np.eye(n)
     return _solve(system + 1e-13 * np.eye(n), right[..., None])[..., :-1, 0]
+
+
+def _plane_vertex_steps(g: np.ndarray, ties: np.ndarray, right: np.ndarray, clash: np.ndarray
+                        ) -> np.ndarray:
+    """
+    Return z (K, V, 2) of vertex sets on a plane of solutions (k = 2), by Cramer's rule.
+
+    The same systems as ``_vertex_steps``, [g_s, -tie_s] (z, t) = right_s for the three
+    pieces s, written out: many small LAPACK calls cost more.
+    """
+    x, y, t = g[..., 0], g[..., 1], np.broadcast_to(-ties, g.shape[:-1])   # (K, V, 3) each
+    x, y = x + np.array([1e-13, 0.0, 0.0]), y + np.array([0.0, 1e-13, 0.0])
+    t = t + np.array([0.0, 0.0, 1e-13])
+    # cofactors of the first two columns: the rows' cross products, (K, V, 3) each
+    cx = y[..., [1, 2, 0]] * t[..., [2, 0, 1]] - t[..., [1, 2, 0]] * y[..., [2, 0, 1]]
+    cy = t[..., [1, 2, 0]] * x[..., [2, 0, 1]] - x[..., [1, 2, 0]] * t[..., [2, 0, 1]]
+    det = np.einsum('...s,...s->...', x, cx)
+    with np.errstate(all='ignore'):
+        z = np.stack((np.einsum('...s,...s->...', right, cx),
+                      np.einsum('...s,...s->...', right, cy)), axis=-1) / det[..., None]
+    return np.where(clash[..., None], 0.0, z)
+
+
+def _plane_kkt_steps(hess: np.ndarray, g: np.ndarray, pieces: np.ndarray, ties: np.ndarray,
+                     right: np.ndarray, clash: np.ndarray) -> np.ndarray:
+    """
+    Return z (K, C, 2) of the sets with unused slots on a plane of solutions (k = 2).
+
+    The same steps as ``_kkt_steps``, written out. Slot 0 is the largest joint (a tie), slot
+    1 a second piece or unused, slot 2 unused. With one piece the step is the stationary point
+    of that joint's displacement, z = -H^-1 g; with two, (z, t) moves along the line the two
+    constraints leave to where t + z^T H z / 2 is stationary. H is the Hessian of the
+    Lagrangian at least-squares multipliers (as in ``_kkt_steps``) plus a ridge of 1e-13.
+    """
+    second = pieces[:, 1] != pieces.max()                  # (C,): two pieces used
+    tie = ties[:, 1]                                       # (C,): the second piece is a joint
+    x0, y0, x1, y1 = g[..., 0, 0], g[..., 0, 1], g[..., 1, 0], g[..., 1, 1]   # (K, C)
+    r0, r1 = right[..., 0], right[..., 1]
+    with np.errstate(all='ignore'):
+        # multipliers: (1 - tie lam, lam) least |y0 g0 + y1 g1| (the ties' summing to 1)
+        ex, ey = x1 - tie * x0, y1 - tie * y0
+        size = ex * ex + ey * ey
+        lam = np.where(second, np.where(size > 0.0, -(x0 * ex + y0 * ey) / size, 0.5 * tie),
+                       0.0)
+        first = 1.0 - tie * lam
+        h = hess[:, :, :, pieces[:, 0]] * first[:, None, None] + (
+            hess[:, :, :, pieces[:, 1]] * lam[:, None, None])              # (K, 2, 2, C)
+        hxx, hxy, hyy = h[:, 0, 0] + 1e-13, h[:, 0, 1], h[:, 1, 1] + 1e-13
+        det = hxx * hyy - hxy * hxy
+        alone = np.stack((hxy * y0 - hyy * x0, hxy * x0 - hxx * y0), axis=-1) / det[..., None]
+        # the line: direction n = (g0, -1) x (g1, -tie), through the least-norm solution
+        nx, ny, nt = y1 - tie * y0, tie * x0 - x1, x0 * y1 - y0 * x1
+        norm = nx * nx + ny * ny + nt * nt
+        px = (r0 * (y1 * nt + tie * ny) - r1 * (ny + nt * y0)) / norm
+        py = (r1 * (nt * x0 + nx) - r0 * (tie * nx + x1 * nt)) / norm
+        hx, hy = hxx * nx + hxy * ny, hxy * nx + hyy * ny
+        s = -(nt + hx * px + hy * py) / (hx * nx + hy * ny)
+        line = np.stack((px + s * nx, py + s * ny), axis=-1)
+    z = np.where(second[:, None], line, alone)
+    return np.where(clash[..., None] | ~np.isfinite(z), 0.0, z)
 
 
 def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.ndarray,
