@@ -89,7 +89,6 @@ class _ActiveSets(NamedTuple):
 
     pieces: np.ndarray      # (C, k + 1): the pieces of each set
     ties: np.ndarray        # (C, k + 1): 1 where the piece is a joint's displacement
-    idle: np.ndarray        # (C, k + 1, k + 1): 1 on the diagonal at the unused slots
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
     clashes: np.ndarray     # (r _WALLS, C): 1 where the set holds joint piece t and limit w,
     #                         at row t _WALLS + w (a set that ties a joint it holds at a limit)
@@ -115,9 +114,7 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     unused = pieces == r + _WALLS
     clashes = np.array([[t in s and r + w in s for s in pieces.tolist()]
                         for t in range(r) for w in range(_WALLS)], dtype=float)
-    return _ActiveSets(pieces, (pieces < r).astype(float),
-                       unused.astype(float)[:, :, None] * np.eye(k + 1), ~unused.any(axis=1),
-                       clashes)
+    return _ActiveSets(pieces, (pieces < r).astype(float), ~unused.any(axis=1), clashes)
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -155,139 +152,118 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
 
     The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
-    A set of k + 1 pieces (a vertex: no unused slot) fixes z and t by those k + 1 equations
-    alone (``_vertex_steps``); a smaller one takes the Hessian of the Lagrangian into account
-    (``_kkt_steps``). A set that ties a joint it also holds at a limit
-    has no step (z = 0).
+    Its first piece is the largest joint's (a tie), so t = g_0 z + e_0, and what is left is in
+    z alone: (g_s - tie_s g_0) z = rhs_s - tie_s rhs_0 for the other pieces s. A set of k + 1
+    pieces (a vertex: no unused slot) fixes z by those k equations alone (``_vertex_steps``);
+    a smaller one takes the Hessian of the Lagrangian into account (``_kkt_steps``). A set that
+    ties a joint it also holds at a limit has no step (z = 0).
     """
-    pieces, ties, idle, vertex, clashes = sets
+    pieces, ties, vertex, clashes = sets
     g = grad[:, pieces]                                                     # (K, C, p, k)
     r = clashes.shape[0] // _WALLS
     at_limit = joint[:, :r, None] == joint[:, None, r: r + _WALLS]          # (K, r, _WALLS)
     clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
     right = np.where(clash[..., None], 0.0, rhs[:, pieces])
+    # the other pieces' equations in z alone, (K, C, k, k) and (K, C, k)
+    rows = g[..., 1:, :] - ties[:, 1:, None] * g[..., :1, :]
+    values = right[..., 1:] - ties[:, 1:] * right[..., :1]
     z = np.empty(g.shape[:2] + g.shape[3:])
-    plane = g.shape[3] == 2                 # closed forms beat many tiny LAPACK calls there
-    z[:, vertex] = (_plane_vertex_steps if plane else _vertex_steps)(
-        g[:, vertex], ties[vertex], right[:, vertex], clash[:, vertex])
-    if not vertex.all() and plane:
-        z[:, ~vertex] = _plane_kkt_steps(hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
-                                         right[:, ~vertex], clash[:, ~vertex])
-    elif not vertex.all():
-        z[:, ~vertex] = _kkt_steps(grad, hess, g[:, ~vertex], pieces[~vertex], ties[~vertex],
-                                   idle[~vertex], right[:, ~vertex], clash[:, ~vertex])
+    z[:, vertex] = _vertex_steps(rows[:, vertex], values[:, vertex], clash[:, vertex])
+    if not vertex.all():
+        z[:, ~vertex] = _kkt_steps(hess, g[:, ~vertex, 0], rows[:, ~vertex], values[:, ~vertex],
+                                   pieces[~vertex], ties[~vertex], clash[:, ~vertex])
     return np.where(np.isfinite(z), z, 0.0)
 
 
-def _vertex_steps(g: np.ndarray, ties: np.ndarray, right: np.ndarray, clash: np.ndarray
-                  ) -> np.ndarray:
+def _vertex_steps(rows: np.ndarray, values: np.ndarray, clash: np.ndarray) -> np.ndarray:
+    """Return z (K, V, k) of vertex sets: rows z = values (``_sqp_steps``); clash sets: 0."""
+    k = rows.shape[-1]
+    rows = np.where(clash[..., None, None], np.eye(k), rows)
+    return _solve_small(rows + 1e-13 * np.eye(k), np.where(clash[..., None], 0.0, values))
+
+
+def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.ndarray,
+               pieces: np.ndarray, ties: np.ndarray, clash: np.ndarray) -> np.ndarray:
     """
-    Return z (K, V, k) of vertex sets: the solution of g z - ties t = right (k + 1 equations).
+    Return z (K, C, k) of the sets ``pieces`` (C, p) with unused slots (``_sqp_steps``).
 
-    g (K, V, k + 1, k), ties (V, k + 1), right (K, V, k + 1); ``clash`` sets get z = 0.
+    min g_0 z + z^T H z / 2 subject to the used ``rows`` z = ``values`` (at most k - 1), with
+    H the Hessian of the Lagrangian sum_s y_s H_s taken at least-squares multipliers (min
+    |sum_s y_s g_s| with the ties' y summing to 1) and a ridge of 1e-13: with no row the
+    stationary point of the largest joint's displacement; with k - 1 rows (k <= 3) along the
+    line they leave, in closed form; else by the KKT system. ``clash`` sets get z = 0.
     """
-    n = g.shape[-1] + 1
-    system = np.concatenate((g, np.broadcast_to(-ties[:, :, None], g.shape[:-1] + (1,))), axis=3)
-    system[clash] = np.eye(n)
-    return _solve(system + 1e-13 * np.eye(n), right[..., None])[..., :-1, 0]
-
-
-def _plane_vertex_steps(g: np.ndarray, ties: np.ndarray, right: np.ndarray, clash: np.ndarray
-                        ) -> np.ndarray:
-    """
-    Return z (K, V, 2) of vertex sets on a plane of solutions (k = 2), by Cramer's rule.
-
-    The same systems as ``_vertex_steps``, [g_s, -tie_s] (z, t) = right_s for the three
-    pieces s, written out: many small LAPACK calls cost more.
-    """
-    x, y, t = g[..., 0], g[..., 1], np.broadcast_to(-ties, g.shape[:-1])   # (K, V, 3) each
-    x, y = x + np.array([1e-13, 0.0, 0.0]), y + np.array([0.0, 1e-13, 0.0])
-    t = t + np.array([0.0, 0.0, 1e-13])
-    # cofactors of the first two columns: the rows' cross products, (K, V, 3) each
-    cx = y[..., [1, 2, 0]] * t[..., [2, 0, 1]] - t[..., [1, 2, 0]] * y[..., [2, 0, 1]]
-    cy = t[..., [1, 2, 0]] * x[..., [2, 0, 1]] - x[..., [1, 2, 0]] * t[..., [2, 0, 1]]
-    det = np.einsum('...s,...s->...', x, cx)
-    with np.errstate(all='ignore'):
-        z = np.stack((np.einsum('...s,...s->...', right, cx),
-                      np.einsum('...s,...s->...', right, cy)), axis=-1) / det[..., None]
-    return np.where(clash[..., None], 0.0, z)
-
-
-def _plane_kkt_steps(hess: np.ndarray, g: np.ndarray, pieces: np.ndarray, ties: np.ndarray,
-                     right: np.ndarray, clash: np.ndarray) -> np.ndarray:
-    """
-    Return z (K, C, 2) of the sets with unused slots on a plane of solutions (k = 2).
-
-    The same steps as ``_kkt_steps``, written out. Slot 0 is the largest joint (a tie), slot
-    1 a second piece or unused, slot 2 unused. With one piece the step is the stationary point
-    of that joint's displacement, z = -H^-1 g; with two, (z, t) moves along the line the two
-    constraints leave to where t + z^T H z / 2 is stationary. H is the Hessian of the
-    Lagrangian at least-squares multipliers (as in ``_kkt_steps``) plus a ridge of 1e-13.
-    """
-    second = pieces[:, 1] != pieces.max()                  # (C,): two pieces used
-    tie = ties[:, 1]                                       # (C,): the second piece is a joint
-    x0, y0, x1, y1 = g[..., 0, 0], g[..., 0, 1], g[..., 1, 0], g[..., 1, 1]   # (K, C)
-    r0, r1 = right[..., 0], right[..., 1]
-    with np.errstate(all='ignore'):
-        # multipliers: (1 - tie lam, lam) least |y0 g0 + y1 g1| (the ties' summing to 1)
-        ex, ey = x1 - tie * x0, y1 - tie * y0
-        size = ex * ex + ey * ey
-        lam = np.where(second, np.where(size > 0.0, -(x0 * ex + y0 * ey) / size, 0.5 * tie),
-                       0.0)
-        first = 1.0 - tie * lam
-        h = hess[:, :, :, pieces[:, 0]] * first[:, None, None] + (
-            hess[:, :, :, pieces[:, 1]] * lam[:, None, None])              # (K, 2, 2, C)
-        hxx, hxy, hyy = h[:, 0, 0] + 1e-13, h[:, 0, 1], h[:, 1, 1] + 1e-13
-        det = hxx * hyy - hxy * hxy
-        alone = np.stack((hxy * y0 - hyy * x0, hxy * x0 - hxx * y0), axis=-1) / det[..., None]
-        # the line: direction n = (g0, -1) x (g1, -tie), through the least-norm solution
-        nx, ny, nt = y1 - tie * y0, tie * x0 - x1, x0 * y1 - y0 * x1
-        norm = nx * nx + ny * ny + nt * nt
-        px = (r0 * (y1 * nt + tie * ny) - r1 * (ny + nt * y0)) / norm
-        py = (r1 * (nt * x0 + nx) - r0 * (tie * nx + x1 * nt)) / norm
-        hx, hy = hxx * nx + hxy * ny, hxy * nx + hyy * ny
-        s = -(nt + hx * px + hy * py) / (hx * nx + hy * ny)
-        line = np.stack((px + s * nx, py + s * ny), axis=-1)
-    z = np.where(second[:, None], line, alone)
+    k = g0.shape[-1]
+    used = pieces[:, 1:k] != pieces.max()                                   # (C, k - 1)
+    rows, values = rows[..., : k - 1, :] * used[:, :, None], values[..., : k - 1] * used
+    # the other pieces' multipliers: least |g_0 + rows^T y| (rows = g_s - tie_s g_0)
+    gram = _dot(rows[..., :, None, :], rows[..., None, :, :])              # (K, C, k-1, k-1)
+    ridge = 1e-12 * sum(gram[..., i, i] for i in range(k - 1)) + 1e-300
+    gram = gram + (ridge[..., None, None] + ~used[:, :, None]) * np.eye(k - 1)
+    y = _solve_small(gram, -_dot(rows, g0[..., None, :]))
+    weights = [1.0 - _dot(ties[:, 1:k], y)] + [y[..., s] for s in range(k - 1)]
+    h = np.moveaxis(hess, 3, 1)[:, pieces[:, :k]]                           # (K, C, k, k, k)
+    lagrangian = sum(w[..., None, None] * h[:, :, s] for s, w in enumerate(weights))
+    lagrangian = lagrangian + 1e-13 * np.eye(k)
+    count = used.sum(axis=1)
+    z = np.empty(g0.shape)
+    for c in np.unique(count):
+        sel = count == c
+        hl, gs, rs, vs = lagrangian[:, sel], g0[:, sel], rows[:, sel, :c], values[:, sel, :c]
+        if c == 0:
+            z[:, sel] = _solve_small(hl, -gs)
+        elif c == k - 1 and k <= 3:         # the least-norm solution plus s times the line's n
+            n = (np.stack((-rs[..., 0, 1], rs[..., 0, 0]), axis=-1) if k == 2
+                 else _cross(rs[..., 0, :], rs[..., 1, :]))
+            base = _dot(np.swapaxes(rs, -1, -2),
+                        _solve_small(gram[:, sel, :c, :c], vs)[..., None, :])
+            hn = _dot(hl, n[..., None, :])
+            with np.errstate(all='ignore'):
+                s = -(_dot(gs, n) + _dot(hn, base)) / _dot(hn, n)
+            z[:, sel] = base + s[..., None] * n
+        else:
+            border = np.zeros(gs.shape[:2] + (k + c, k + c))
+            border[..., :k, :k] = hl
+            border[..., k:, :k] = rs
+            border[..., :k, k:] = np.swapaxes(rs, -1, -2)
+            border[..., k:, k:] = 1e-13 * np.eye(c)
+            z[:, sel] = _solve(border, np.concatenate((-gs, vs), axis=-1)[..., None])[..., :k, 0]
     return np.where(clash[..., None] | ~np.isfinite(z), 0.0, z)
 
 
-def _kkt_steps(grad: np.ndarray, hess: np.ndarray, g: np.ndarray, pieces: np.ndarray,
-               ties: np.ndarray, idle: np.ndarray, right: np.ndarray, clash: np.ndarray
-               ) -> np.ndarray:
-    """
-    Return z (K, C, k) of the sets ``pieces`` (C, p) with unused slots, by their KKT systems.
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return the sums of products over the last axis (of a few entries), as a fold."""
+    return functools.reduce(np.add, [a[..., i] * b[..., i] for i in range(a.shape[-1])])
 
-    The KKT system in (z, t, multipliers y), with the Hessian of the Lagrangian sum_p y_p H_p
-    taken at least-squares multipliers (min |g^T y| with the ties' y summing to 1); unused
-    slots (``idle``, (C, p, p)) get y = 0. ``clash`` sets get z = 0.
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return the cross products of 3-vectors (..., 3)."""
+    return np.stack((a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]), axis=-1)
+
+
+def _solve_small(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
-    k_count, k = grad.shape[0], grad.shape[2]
-    c, p = pieces.shape
-    gram = grad @ np.swapaxes(grad, 1, 2)                                   # (K, r + 3, r + 3)
-    ls = np.zeros((k_count, c, p + 1, p + 1))
-    ls[..., :p, :p] = gram[:, pieces[:, :, None], pieces[:, None, :]] + idle
-    ls[..., p, :p] = ls[..., :p, p] = ties
-    ls[clash] = np.eye(p + 1)
-    gram_trace = np.trace(ls[..., :p, :p], axis1=2, axis2=3)[..., None, None]
-    ls[..., :p, :p] += 1e-12 * gram_trace * np.eye(p)                      # a relative ridge
-    y = _solve(ls, np.broadcast_to(np.eye(p + 1)[p], (k_count, c, p + 1))[..., None])
-    n = k + 1 + p
-    kkt = np.zeros((k_count, c, n, n))
-    weights = np.zeros((k_count, c, hess.shape[3]))        # y by piece
-    weights[:, np.arange(c)[:, None], pieces] = y[..., :p, 0]
-    weights[..., -1] = 0.0                                  # the unused slot (its H is 0)
-    kkt[..., :k, :k] = (weights @ hess.reshape(k_count, k * k, -1).swapaxes(1, 2)).reshape(
-        k_count, c, k, k)
-    kkt[..., :k, k + 1:] = np.swapaxes(g, 2, 3)
-    kkt[..., k + 1:, :k] = g
-    kkt[..., k, k + 1:] = kkt[..., k + 1:, k] = -ties
-    kkt[..., k + 1:, k + 1:] = idle
-    kkt[clash] = np.eye(n)
-    full = np.zeros((k_count, c, n))
-    full[..., k] = np.where(clash, 0.0, -1.0)
-    full[..., k + 1:] = right
-    return _solve(kkt + 1e-13 * np.eye(n), full[..., None])[..., :k, 0]
+    Return x with a x = b, for a (..., n, n) and b (..., n).
+
+    Closed forms for n <= 3 (many tiny LAPACK calls cost more); ``_solve`` otherwise.
+    """
+    n = a.shape[-1]
+    if n > 3:
+        return _solve(a, b[..., None])[..., 0]
+    with np.errstate(all='ignore'):
+        if n == 1:
+            return b / a[..., 0]
+        if n == 2:
+            det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+            return np.stack((a[..., 1, 1] * b[..., 0] - a[..., 0, 1] * b[..., 1],
+                             a[..., 0, 0] * b[..., 1] - a[..., 1, 0] * b[..., 0]),
+                            axis=-1) / det[..., None]
+        # x = sum_s b_s (a_{s+1} x a_{s+2}) / det, over the rows a_s
+        c = _cross(a[..., [1, 2, 0], :], a[..., [2, 0, 1], :])
+        det = _dot(a[..., 0, :], c[..., 0, :])
+        return _dot(np.swapaxes(c, -1, -2), b[..., None, :]) / det[..., None]
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
