@@ -159,19 +159,21 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     ties a joint it also holds at a limit has no step (z = 0).
     """
     pieces, ties, vertex, clashes = sets
-    g = grad[:, pieces]                                                     # (K, C, p, k)
     r = clashes.shape[0] // _WALLS
     at_limit = joint[:, :r, None] == joint[:, None, r: r + _WALLS]          # (K, r, _WALLS)
     clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
-    right = np.where(clash[..., None], 0.0, rhs[:, pieces])
-    # the other pieces' equations in z alone, (K, C, k, k) and (K, C, k)
-    rows = g[..., 1:, :] - ties[:, 1:, None] * g[..., :1, :]
-    values = right[..., 1:] - ties[:, 1:] * right[..., :1]
-    z = np.empty(g.shape[:2] + g.shape[3:])
-    z[:, vertex] = _vertex_steps(rows[:, vertex], values[:, vertex], clash[:, vertex])
+    # each piece's equation in z alone, (K, r + 3, k) and (K, r + 3) (zero for piece 0 and
+    # for the unused slot)
+    tie = (np.arange(rhs.shape[1]) < r).astype(float)
+    rows = grad - tie[:, None] * grad[:, :1]
+    values = rhs - tie * rhs[:, :1]
+    others = pieces[:, 1:]
+    z = np.empty(clash.shape + grad.shape[2:])
+    z[:, vertex] = _vertex_steps(rows[:, others[vertex]], values[:, others[vertex]],
+                                 clash[:, vertex])
     if not vertex.all():
-        z[:, ~vertex] = _kkt_steps(hess, g[:, ~vertex, 0], rows[:, ~vertex], values[:, ~vertex],
-                                   pieces[~vertex], ties[~vertex], clash[:, ~vertex])
+        z[:, ~vertex] = _kkt_steps(hess, grad[:, 0], rows, values, pieces[~vertex], tie,
+                                   clash[:, ~vertex])
     return np.where(np.isfinite(z), z, 0.0)
 
 
@@ -183,28 +185,31 @@ def _vertex_steps(rows: np.ndarray, values: np.ndarray, clash: np.ndarray) -> np
 
 
 def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.ndarray,
-               pieces: np.ndarray, ties: np.ndarray, clash: np.ndarray) -> np.ndarray:
+               pieces: np.ndarray, tie: np.ndarray, clash: np.ndarray) -> np.ndarray:
     """
     Return z (K, C, k) of the sets ``pieces`` (C, p) with unused slots (``_sqp_steps``).
 
-    min g_0 z + z^T H z / 2 subject to the used ``rows`` z = ``values`` (at most k - 1), with
-    H the Hessian of the Lagrangian sum_s y_s H_s taken at least-squares multipliers (min
-    |sum_s y_s g_s| with the ties' y summing to 1) and a ridge of 1e-13: with no row the
-    stationary point of the largest joint's displacement; with k - 1 rows (k <= 3) along the
-    line they leave, in closed form; else by the KKT system. ``clash`` sets get z = 0.
+    min g_0 z + z^T H z / 2 subject to the set's other pieces' ``rows`` z = ``values`` (at most
+    k - 1; rows and values by piece, ``tie`` by piece), with H the Hessian of the Lagrangian
+    sum_s y_s H_s taken at least-squares multipliers (min |sum_s y_s g_s| with the ties' y
+    summing to 1) and a ridge of 1e-13: with no row the stationary point of the largest
+    joint's displacement; with k - 1 rows (k <= 3) along the line they leave, in closed form;
+    else by the KKT system. ``clash`` sets get z = 0.
     """
     k = g0.shape[-1]
-    used = pieces[:, 1:k] != pieces.max()                                   # (C, k - 1)
-    rows, values = rows[..., : k - 1, :] * used[:, :, None], values[..., : k - 1] * used
+    others = pieces[:, 1:k]                                                 # (C, k - 1)
+    used = others != pieces.max()
     # the other pieces' multipliers: least |g_0 + rows^T y| (rows = g_s - tie_s g_0)
-    gram = _dot(rows[..., :, None, :], rows[..., None, :, :])              # (K, C, k-1, k-1)
+    gram = _dot(rows[:, :, None, :], rows[:, None, :, :])[:, others[:, :, None], others[:, None]]
     ridge = 1e-12 * sum(gram[..., i, i] for i in range(k - 1)) + 1e-300
     gram = gram + (ridge[..., None, None] + ~used[:, :, None]) * np.eye(k - 1)
-    y = _solve_small(gram, -_dot(rows, g0[..., None, :]))
-    weights = [1.0 - _dot(ties[:, 1:k], y)] + [y[..., s] for s in range(k - 1)]
+    y = _solve_small(gram, -_dot(rows, g0[:, None, :])[:, others])
+    weights = [1.0 - _dot(tie[others], y)] + [y[..., s] for s in range(k - 1)]
     h = np.moveaxis(hess, 3, 1)[:, pieces[:, :k]]                           # (K, C, k, k, k)
     lagrangian = sum(w[..., None, None] * h[:, :, s] for s, w in enumerate(weights))
     lagrangian = lagrangian + 1e-13 * np.eye(k)
+    rows, values = rows[:, others], values[:, others]                       # (K, C, k - 1, k)
+    g0 = np.broadcast_to(g0[:, None, :], (len(g0), len(pieces), k))
     count = used.sum(axis=1)
     z = np.empty(g0.shape)
     for c in np.unique(count):
