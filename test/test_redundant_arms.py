@@ -11,7 +11,7 @@ from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import iepso as iepso_module, plan
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
-                                          _pieces, _sqp_steps, _WALLS, Linearisation, polish)
+                                          _pieces, _sqp_steps, Linearisation, polish)
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -56,6 +56,42 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
     assert compared >= 10
 
 
+@pytest.mark.parametrize('k, m', [(2, 5), (3, 6)])
+def test_the_flat_step_reaches_vertices_with_up_to_k_joints_on_a_limit(k: int, m: int) -> None:
+    # the linear minimax with the joints' limits near: where the least motion time has one
+    # joint at it and the others of its k + 1 pieces on a limit (the Panda's misses when only
+    # the two nearest limits were tried), the step still lands on it
+    rng = np.random.default_rng(20 + k)
+    on_limits = []
+    for _ in range(400):
+        null = np.linalg.qr(rng.normal(size=(m, k)))[0].T[None]          # (1, k, m)
+        b = rng.choice([-1.0, 1.0], (1, m)) * rng.uniform(1.0, 3.0, (1, m))
+        lo, hi = -rng.uniform(0.0, 0.6, (1, m)), rng.uniform(0.0, 0.6, (1, m))
+        scale = rng.uniform(1.0, 2.0, m)
+        z = _active_set_minimax(b, null, np.zeros((1, k, k, m)), scale, lo, hi,
+                                np.array([100.0]))
+        ours = np.max(np.abs(b[0] + z[0] @ null[0]) * scale)
+        a = null[0].T * scale[:, None]
+        rows = np.block([[a, -np.ones((m, 1))], [-a, -np.ones((m, 1))],
+                         [null[0].T, np.zeros((m, 1))], [-null[0].T, np.zeros((m, 1))]])
+        rhs = np.concatenate((-scale * b[0], scale * b[0], hi[0], -lo[0]))
+        best = linprog(np.eye(k + 1)[-1], A_ub=rows, b_ub=rhs, bounds=[(None, None)] * (k + 1))
+        if best.status != 0:
+            continue
+        step = best.x[:k] @ null[0]
+        near = np.where(hi[0] < -lo[0], hi[0], lo[0])                   # each nearer limit
+        limits = np.flatnonzero(np.abs(step - near) < 1e-9)
+        tying = np.flatnonzero(np.abs(b[0] + step) * scale >= best.fun - 1e-9)
+        nearest = np.argsort(np.minimum(hi[0], -lo[0]))[:k]
+        top = np.argsort(-np.abs(b[0]) * scale)[: k + _LARGEST]
+        if (len(limits) == k and len(tying) == 1 and np.isin(limits, nearest).all()
+                and tying[0] == top[0] and tying[0] not in limits
+                and np.all(np.sign(b[0] + step) == np.sign(b[0]))):
+            on_limits.append(ours / best.fun - 1.0)
+    assert len(on_limits) >= 5
+    np.testing.assert_allclose(on_limits, 0.0, atol=1e-9)
+
+
 def kkt_step(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, used: list[int],
              ties: list[bool]) -> np.ndarray:
     """
@@ -94,7 +130,7 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     z = _sqp_steps(grad, hess, rhs, joint, sets)
     for i in range(6):
         for c, (set_pieces, set_ties) in enumerate(zip(pieces, ties)):
-            used = [int(p) for p in set_pieces if p != r + _WALLS]
+            used = [int(p) for p in set_pieces if p != r + k]
             held = joint[i, used]
             if set(held[set_ties[: len(used)] > 0]) & set(held[set_ties[: len(used)] == 0]):
                 np.testing.assert_array_equal(z[i, c], 0.0)   # ties a joint held at a limit

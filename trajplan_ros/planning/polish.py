@@ -26,9 +26,11 @@ With k >= 2 null directions (a 5- to 7-joint arm: the solutions form a k-dimensi
 line searches are replaced by one step of sequential quadratic programming on the model
 x(z) = x + z N + z^T Q z of the solutions (Q from the second derivatives along every pair of
 null directions): each candidate active set (the joints tying with the largest displacement,
-chosen among the k + 2 largest, with none, one or both of the two nearest joint limits) gives
-a step: a vertex set (k + 1 pieces) by its k + 1 equations, a smaller one by its KKT system;
-the best on the model wins (``_active_set_minimax``). Near a minimum that is
+chosen among the k + 2 largest, with any of the k nearest joint limits) gives a step: a
+vertex set (k + 1 pieces) by its equations, a smaller one by its KKT system, both in closed
+form where they are small (up to 3x3: numpy's batched LAPACK calls cost more than the
+arithmetic at these sizes); the best on the model wins (``_active_set_minimax``). Near a
+minimum that is
 Newton's method on the right active set: it converges in a few steps where a coordinate
 descent along the null directions stalls on the ridge where joints tie. Ties are then broken
 only by the merit's travel term and by ``iepso._fastest`` among the candidates.
@@ -55,9 +57,10 @@ __all__ = ['Linearisation', 'polish', 'settle']
 
 _TIE = 1e-12
 #: The active sets of ``_active_set_minimax`` tie the largest displacement with others among
-#: the k + _LARGEST largest, and include none, one or both of the _WALLS nearest limits.
+#: the k + _LARGEST largest, and include any of the k nearest limits (a vertex has k + 1
+#: pieces, at least one a joint's displacement: up to k can be limits; with two limits only,
+#: the Panda missed optima with one joint at the motion time and three on a limit).
 _LARGEST = 2
-_WALLS = 2
 #: On sets of 2+ dimensions: chord steps of the second-order correction, and the rejections
 #: in a row after which a candidate with an error (m) at most _CONVERGED_ERROR counts as
 #: converged and leaves the batch.
@@ -90,8 +93,8 @@ class _ActiveSets(NamedTuple):
     pieces: np.ndarray      # (C, k + 1): the pieces of each set
     ties: np.ndarray        # (C, k + 1): 1 where the piece is a joint's displacement
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
-    clashes: np.ndarray     # (r _WALLS, C): 1 where the set holds joint piece t and limit w,
-    #                         at row t _WALLS + w (a set that ties a joint it holds at a limit)
+    clashes: np.ndarray     # (r k, C): 1 where the set holds joint piece t and limit w, at
+    #                         row t k + w (a set that ties a joint it holds at a limit)
 
 
 @functools.lru_cache(maxsize=16)
@@ -99,22 +102,23 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     """
     Return the active sets that ``_active_set_minimax`` tries (``_ActiveSets``).
 
-    Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r and
-    r + 1 the two limits nearest to the candidate, and r + 2 an unused slot; ``ties`` marks
+    Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r to
+    r + k - 1 the k limits nearest to the candidate, and r + k an unused slot; ``ties`` marks
     the joints. Every set of 1 to k + 1 joints that holds the largest (near a minimum the
     tying joints are the largest; away from one, a step that lowers the largest is what
-    counts), with none, either or both limits, at most k + 1 pieces in all; with
-    ``vertex_only``, only the sets of k + 1 pieces.
+    counts), with any of those limits, at most k + 1 pieces in all; with ``vertex_only``, only
+    the sets of k + 1 pieces.
     """
-    walls = [w for n in range(_WALLS + 1) for w in itertools.combinations(range(r, r + _WALLS), n)]
-    sets = [(*s, *w, *([r + _WALLS] * (k + 1 - j - len(w))))
+    unused = r + k
+    walls = [w for n in range(k + 1) for w in itertools.combinations(range(r, unused), n)]
+    sets = [(*s, *w, *([unused] * (k + 1 - j - len(w))))
             for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
             for s in itertools.combinations(range(r), j) if s[0] == 0]
-    pieces = np.array([s for s in sets if not vertex_only or r + _WALLS not in s])
-    unused = pieces == r + _WALLS
+    pieces = np.array([s for s in sets if not vertex_only or unused not in s])
     clashes = np.array([[t in s and r + w in s for s in pieces.tolist()]
-                        for t in range(r) for w in range(_WALLS)], dtype=float)
-    return _ActiveSets(pieces, (pieces < r).astype(float), ~unused.any(axis=1), clashes)
+                        for t in range(r) for w in range(k)], dtype=float)
+    return _ActiveSets(pieces, (pieces < r).astype(float), ~(pieces == unused).any(axis=1),
+                       clashes)
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -124,19 +128,19 @@ def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray
     Return the pieces of ``_active_sets`` per candidate: gradients, Hessians, KKT right sides.
 
     Pieces: the r largest scaled displacements, each with its sign (g z - t = -e, e its size at
-    z = 0), the two nearest limits (n z = the gap to the limit), an unused slot (zeros).
-    Gradients (K, r + 3, k), Hessians (K, k, k, r + 3), right sides (K, r + 3), and the joint
-    of each piece (K, r + 3; -1 for the unused slot).
+    z = 0), the k nearest limits (n z = the gap to the limit), an unused slot (zeros).
+    Gradients (K, P, k), Hessians (K, k, k, P), right sides (K, P), and the joint of each
+    piece (K, P; -1 for the unused slot), with P = r + k + 1 pieces.
     """
     k_count, k, m = null.shape
     rows_k = np.arange(k_count)[:, None]
     sign = np.where(b >= 0.0, 1.0, -1.0) * scale
     size = np.abs(b) * scale
     top = np.argsort(-size, axis=1)[:, :r]                                  # (K, r)
-    walls = np.argsort(np.minimum(gap_hi, -gap_lo), axis=1)[:, :_WALLS]     # (K, 2)
+    walls = np.argsort(np.minimum(gap_hi, -gap_lo), axis=1)[:, :k]          # (K, k)
     joint = np.concatenate((top, walls, np.full((k_count, 1), -1)), axis=1)
     # each piece's sign: the joint's for a displacement, 1 for a limit, 0 for the unused slot
-    weight = np.concatenate((sign[rows_k, top], np.ones((k_count, _WALLS)),
+    weight = np.concatenate((sign[rows_k, top], np.ones((k_count, k)),
                              np.zeros((k_count, 1))), axis=1)
     grad = np.swapaxes(null, 1, 2)[rows_k, joint] * weight[:, :, None]
     hess = (np.take_along_axis(quad, joint[:, None, None, :], axis=3)
@@ -159,10 +163,11 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     ties a joint it also holds at a limit has no step (z = 0).
     """
     pieces, ties, vertex, clashes = sets
-    r = clashes.shape[0] // _WALLS
-    at_limit = joint[:, :r, None] == joint[:, None, r: r + _WALLS]          # (K, r, _WALLS)
+    k = grad.shape[2]
+    r = clashes.shape[0] // k
+    at_limit = joint[:, :r, None] == joint[:, None, r: r + k]               # (K, r, k)
     clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
-    # each piece's equation in z alone, (K, r + 3, k) and (K, r + 3) (zero for piece 0 and
+    # each piece's equation in z alone, (K, P, k) and (K, P) (zero for piece 0 and
     # for the unused slot)
     tie = (np.arange(rhs.shape[1]) < r).astype(float)
     rows = grad - tie[:, None] * grad[:, :1]
