@@ -85,8 +85,8 @@ class Objective:
                  shaping: RewardPunishment | None = None, across: int = 2) -> None:
         self.arm = arm
         self.mode = Mode(mode)
-        if across not in (0, 1, 2):
-            raise ValueError(f'across must be 0, 1 or 2, got {across}')
+        if type(across) is not int or not 0 <= across <= 2:
+            raise ValueError(f'across must be 0, 1 or 2, got {across!r}')
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f'angular velocity must be finite and positive, got {omega}')
         self.omega = float(omega)
@@ -179,10 +179,10 @@ class Objective:
 
     def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
         """
-        Return the constraint residuals, (N, 3) or in radial mode (N, 5).
+        Return the constraint residuals, (N, 3 + the ``across`` components held; 3 in free mode).
 
         They are p - goal and, in radial mode, the components of u across the goal ray (zero
-        where u = +-p / |p|; see the module docstring).
+        where u = +-p / |p|, with both held; see the module docstring).
         """
         return self.linear_residuals(p - self.goal, u)
 

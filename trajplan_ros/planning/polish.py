@@ -91,10 +91,10 @@ class _ActiveSets(NamedTuple):
     """The active sets that ``_active_set_minimax`` tries (``_active_sets``)."""
 
     pieces: np.ndarray      # (C, k + 1): the pieces of each set
-    ties: np.ndarray        # (C, k + 1): 1 where the piece is a joint's displacement
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
     clashes: np.ndarray     # (r k, C): 1 where the set holds joint piece t and limit w, at
     #                         row t k + w (a set that ties a joint it holds at a limit)
+    r: int                  # pieces 0..r-1 are joints' displacements (ties), r + k unused
 
 
 @functools.lru_cache(maxsize=16)
@@ -103,8 +103,8 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     Return the active sets that ``_active_set_minimax`` tries (``_ActiveSets``).
 
     Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r to
-    r + k - 1 the k limits nearest to the candidate, and r + k an unused slot; ``ties`` marks
-    the joints. Every set of 1 to k + 1 joints that holds the largest (near a minimum the
+    r + k - 1 the k limits nearest to the candidate, and r + k an unused slot. Every set of 1
+    to k + 1 joints that holds the largest (near a minimum the
     tying joints are the largest; away from one, a step that lowers the largest is what
     counts), with any of those limits, at most k + 1 pieces in all; with ``vertex_only``, only
     the sets of k + 1 pieces.
@@ -117,8 +117,7 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     pieces = np.array([s for s in sets if not vertex_only or unused not in s])
     clashes = np.array([[t in s and r + w in s for s in pieces.tolist()]
                         for t in range(r) for w in range(k)], dtype=float)
-    return _ActiveSets(pieces, (pieces < r).astype(float), ~(pieces == unused).any(axis=1),
-                       clashes)
+    return _ActiveSets(pieces, ~(pieces == unused).any(axis=1), clashes, r)
 
 
 def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
@@ -160,11 +159,10 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     z alone: (g_s - tie_s g_0) z = rhs_s - tie_s rhs_0 for the other pieces s. A set of k + 1
     pieces (a vertex: no unused slot) fixes z by those k equations alone (``_vertex_steps``);
     a smaller one takes the Hessian of the Lagrangian into account (``_kkt_steps``). A set that
-    ties a joint it also holds at a limit has no step (z = 0).
+    ties a joint it also holds at a limit has no step (z = 0). On sets of k >= 2 dimensions.
     """
-    pieces, ties, vertex, clashes = sets
+    pieces, vertex, clashes, r = sets
     k = grad.shape[2]
-    r = clashes.shape[0] // k
     at_limit = joint[:, :r, None] == joint[:, None, r: r + k]               # (K, r, k)
     clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
     # each piece's equation in z alone, (K, P, k) and (K, P) (zero for piece 0 and
@@ -177,9 +175,9 @@ def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.nd
     z[:, vertex] = _vertex_steps(rows[:, others[vertex]], values[:, others[vertex]],
                                  clash[:, vertex])
     if not vertex.all():
-        z[:, ~vertex] = _kkt_steps(hess, grad[:, 0], rows, values, pieces[~vertex], tie,
-                                   clash[:, ~vertex])
-    return np.where(np.isfinite(z), z, 0.0)
+        z[:, ~vertex] = _kkt_steps(hess, grad[:, 0], rows, values, pieces[~vertex], r + k,
+                                   tie, clash[:, ~vertex])
+    return np.where(np.isfinite(z).all(axis=2, keepdims=True), z, 0.0)
 
 
 def _vertex_steps(rows: np.ndarray, values: np.ndarray, clash: np.ndarray) -> np.ndarray:
@@ -190,9 +188,10 @@ def _vertex_steps(rows: np.ndarray, values: np.ndarray, clash: np.ndarray) -> np
 
 
 def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.ndarray,
-               pieces: np.ndarray, tie: np.ndarray, clash: np.ndarray) -> np.ndarray:
+               pieces: np.ndarray, unused: int, tie: np.ndarray, clash: np.ndarray
+               ) -> np.ndarray:
     """
-    Return z (K, C, k) of the sets ``pieces`` (C, p) with unused slots (``_sqp_steps``).
+    Return z (K, C, k) of the sets ``pieces`` (C, p) with ``unused`` slots (``_sqp_steps``).
 
     min g_0 z + z^T H z / 2 subject to the set's other pieces' ``rows`` z = ``values`` (at most
     k - 1; rows and values by piece, ``tie`` by piece), with H the Hessian of the Lagrangian
@@ -203,7 +202,7 @@ def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.nd
     """
     k = g0.shape[-1]
     others = pieces[:, 1:k]                                                 # (C, k - 1)
-    used = others != pieces.max()
+    used = others != unused
     # the other pieces' multipliers: least |g_0 + rows^T y| (rows = g_s - tie_s g_0)
     gram = _dot(rows[:, :, None, :], rows[:, None, :, :])[:, others[:, :, None], others[:, None]]
     ridge = 1e-12 * sum(gram[..., i, i] for i in range(k - 1)) + 1e-300
@@ -294,8 +293,8 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     d(z) = b + z N + z^T Q z (b (K, m): displacements; ``null`` (K, k, m): N, orthonormal rows;
     ``quad`` (K, k, k, m): Q, half the second derivative of the solutions). The steps must keep
     the joints within [gap_lo, gap_hi] and ||z|| within ``limit``. Each active set (joints tying
-    with the largest displacement, each with its sign at z = 0, and none, one or both of the
-    nearest limits) gives the SQP step of min t subject to those pieces = t (the limits
+    with the largest displacement, each with its sign at z = 0, and any of the k nearest
+    limits) gives the SQP step of min t subject to those pieces = t (the limits
     reached), ``_sqp_steps``. With k + 1 pieces that is a vertex of the linear model, whatever
     the Hessian. Every step is shortened to the trust radius and judged on the model: its linear
     part must keep within the limits, and where the curvature term passes a limit the joint is

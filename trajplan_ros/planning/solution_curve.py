@@ -53,7 +53,7 @@ def curve_constraint(obj: Objective) -> Objective | None:
     lie on its curves, where the axis comes nearest the goal ray.
     """
     planned = obj.arm.planned
-    if planned - (5 if obj.radial else 3) == 1:
+    if planned - 3 - len(obj.across_basis) == 1:
         return obj
     if obj.radial and planned in (4, 5):
         return Objective(obj.arm, obj.goal, obj.start, mode=Mode.RADIAL, omega=obj.omega,
