@@ -236,7 +236,7 @@ def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.nd
             border[..., k:, :k] = rs
             border[..., :k, k:] = np.swapaxes(rs, -1, -2)
             border[..., k:, k:] = 1e-13 * np.eye(c)
-            z[:, sel] = _solve(border, np.concatenate((-gs, vs), axis=-1)[..., None])[..., :k, 0]
+            z[:, sel] = _solve_small(border, np.concatenate((-gs, vs), axis=-1))[..., :k]
     return np.where(clash[..., None] | ~np.isfinite(z), 0.0, z)
 
 
