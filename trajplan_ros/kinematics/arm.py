@@ -368,13 +368,17 @@ class ArmModel:
             if not still:
                 break
             planned = min(planned, i)
-        if planned == self.planned or planned < 2:
+        if planned == self.planned:
             return self
-        return ArmModel(self.rotations, self.translations, base=self.base,
+        held = ArmModel(self.rotations, self.translations, base=self.base,
                         tool_point=self.tool_point, tool_axis=self.tool_axis, sign=self.sign,
                         offset=self.offset, lower=self.lower, upper=self.upper,
-                        velocity=self.velocity, joint_names=self.joint_names, planned=planned,
-                        base_link=self.base_link, tip_link=self.tip_link)
+                        velocity=self.velocity, joint_names=self.joint_names,
+                        planned=max(planned, 2), base_link=self.base_link,
+                        tip_link=self.tip_link)
+        # a user plans at least two joints; with the second idle, the planner moves one
+        object.__setattr__(held, 'planned', planned)
+        return held
 
     def speeds(self, omega: float) -> np.ndarray:
         """Return each joint's angular velocity (rad/s) at servo velocity omega."""

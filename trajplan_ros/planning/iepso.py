@@ -429,11 +429,13 @@ def _by_multistart(obj: Objective) -> bool:
     """
     Return whether ``_multistart`` searches the solutions after the swarm phase (ours).
 
-    Where the curve search does not serve alone: on isolated points in free mode (three
-    planned joints), where a swarm lands on the fastest less surely than a multi-start Newton
-    search from many probes; on sets of two or more dimensions (free mode on five to seven,
-    radial on seven), which have no curve to follow; and, beside the curve search, on the
-    longer curves of six planned joints (radial mode). There the walk along the curves alone
+    Where the curve search does not serve alone: on isolated points in free mode (one to
+    three planned joints), where a swarm lands on the fastest less surely than a multi-start
+    Newton search from many probes (on a planar two-joint arm the swarms missed the faster of
+    two solutions near a straight elbow on 1 of 300 goals, the multi-start on none); on sets
+    of two or more dimensions (free mode on five to seven, radial on seven), which have no
+    curve to follow; and, beside the curve search, on the longer curves of six planned joints
+    (radial mode). There the walk along the curves alone
     missed a faster stretch on 12 of 300 Panda dev goals (2 with a walk three times as long,
     at 34 ms), the multi-start alone an optimum on a joint limit on 4 of 150 (the walk's seeds
     include the limits), both together on 1 of 150 (31 ms). Radial goals on four or five
@@ -444,7 +446,7 @@ def _by_multistart(obj: Objective) -> bool:
     """
     if obj.radial:
         return obj.arm.planned >= 6
-    return obj.arm.planned != 4 and obj.arm.planned >= 3
+    return obj.arm.planned != 4
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:

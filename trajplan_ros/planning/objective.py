@@ -37,6 +37,9 @@ __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'goal_ray_basis'
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
+#: Relative slack of the reach check (eq. 14): the tool point of a pose at full stretch,
+#: computed in floating point, can lie a few rounding errors beyond the sum of the links.
+REACH_ROUNDING = 1e-9
 
 
 class Mode(str, Enum):
@@ -139,7 +142,8 @@ class Objective:
             raise InvalidRequest(f'goal has a non-finite coordinate: {g.tolist()}')
         with np.errstate(over='ignore'):             # a goal of 1e308 is just far away
             dist = float(np.linalg.norm(g - arm.reach_centre))
-        if dist > arm.reach:
+        # the tool point at full stretch can land a rounding error beyond the links' sum
+        if dist > arm.reach * (1.0 + REACH_ROUNDING):
             where = 'the base' if not arm.reach_centre.any() else 'the first joint'
             raise InvalidRequest(
                 f'goal is {dist:.4f} m from {where}, '
@@ -230,5 +234,8 @@ class Objective:
         p, u = self.tool(x)
         err = self.errors(p, u)
         r = self.motion_time(x)
-        f = r + self.shaping(err, r / self.longest_time, self.err_max)
+        # R as a fraction of the longest motion the limits allow, for the fuzzy rules (0 on an
+        # arm whose planned joints cannot move: limits lower = upper)
+        tau = r / self.longest_time if self.longest_time > 0.0 else np.zeros_like(r)
+        f = r + self.shaping(err, tau, self.err_max)
         return Evaluation(f, r, err)

@@ -74,35 +74,77 @@ def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
 
 
 def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
-    """Return SLSQP's solution of the reference problem from x0, or None when it fails."""
-    from scipy.optimize import minimize
+    """
+    Return SLSQP's solution of the reference problem from x0, or None when it fails.
+
+    SLSQP fails on redundant equalities (more conditions, the residuals the joints can change,
+    than their rank: ``_moving_rows``), and can where the solutions are isolated points (the
+    rank equals the joints that can move the tool). There they have no time to trade along
+    them: a bounded least-squares solve finds the point instead (a joint that cannot move the
+    tool stays at its start).
+    """
+    from scipy.optimize import least_squares, minimize
 
     m, s, speeds = obj.lower.size, obj.start[: obj.lower.size], obj.speeds
+    rows, rank, idle = _moving_rows(obj)
 
     def residuals(z: np.ndarray) -> np.ndarray:
-        return obj.residuals(*obj.tool(z[None, :m]))[0]
+        return rows @ obj.residuals(*obj.tool(z[None, :m]))[0]
 
     def jacobian(z: np.ndarray) -> np.ndarray:
         d = obj.tool_jacobian(z[None, :m])
-        jac = obj.linear_residuals(d.jp[0].T, d.ju[0].T).T          # (rows, m)
+        jac = rows @ obj.linear_residuals(d.jp[0].T, d.ju[0].T).T   # (rows, m)
         return np.hstack((jac, np.zeros((jac.shape[0], 1))))
 
-    slow = np.hstack((-np.eye(m), speeds[:, None]))                 # omega t - (x - s) >= 0
-    fast = np.hstack((np.eye(m), speeds[:, None]))                  # omega t + (x - s) >= 0
-    constraints = [{'type': 'eq', 'fun': residuals, 'jac': jacobian},
-                   {'type': 'ineq', 'fun': lambda z: slow @ z + s, 'jac': lambda z: slow},
-                   {'type': 'ineq', 'fun': lambda z: fast @ z - s, 'jac': lambda z: fast}]
-    bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
-    z0 = np.append(x0, obj.motion_time(x0[None])[0])
-    found = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1], method='SLSQP',
-                     bounds=bounds, constraints=constraints,
-                     options={'maxiter': 200, 'ftol': 1e-12})
-    x = np.clip(found.x[:m], obj.lower, obj.upper)
+    x = None
+    if len(rows) <= rank:
+        slow = np.hstack((-np.eye(m), speeds[:, None]))             # omega t - (x - s) >= 0
+        fast = np.hstack((np.eye(m), speeds[:, None]))              # omega t + (x - s) >= 0
+        constraints = [{'type': 'eq', 'fun': residuals, 'jac': jacobian},
+                       {'type': 'ineq', 'fun': lambda z: slow @ z + s, 'jac': lambda z: slow},
+                       {'type': 'ineq', 'fun': lambda z: fast @ z - s, 'jac': lambda z: fast}]
+        bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
+        z0 = np.append(x0, obj.motion_time(x0[None])[0])
+        x = _on_goal(obj, minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1],
+                                   method='SLSQP', bounds=bounds, constraints=constraints,
+                                   options={'maxiter': 200, 'ftol': 1e-12}).x[:m])
+    if x is None and rank == m - np.count_nonzero(idle):
+        x = _on_goal(obj, least_squares(residuals, np.where(idle, s, x0),
+                                        jac=lambda z: jacobian(z)[:, :m],
+                                        bounds=(obj.lower, obj.upper), xtol=1e-15, ftol=1e-15,
+                                        gtol=1e-15).x)
+    return x
+
+
+def _on_goal(obj: Objective, x: np.ndarray) -> np.ndarray | None:
+    """Return x clipped into the limits if it reaches the goal (within 1e-9), else None."""
+    x = np.clip(x, obj.lower, obj.upper)
     p, u = obj.tool(x[None])
     ok = np.linalg.norm(p[0] - obj.goal) <= 1e-9
     if obj.radial:
         ok &= obj.axis_angle(u)[0] <= 1e-9
     return x if ok else None
+
+
+def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
+    """
+    Return a basis (rows) of the residuals the joints can change, their rank, the idle joints.
+
+    On a planar arm the position residual across the plane never changes: SLSQP fails on such
+    a redundant equality ("singular matrix"), so the reference holds only the others (the
+    goals lie in the plane). The rank of the constraint Jacobian is less than the planned
+    joints where the solutions are not isolated, or where a joint cannot move the tool (the
+    tool point on its axis: idle). All from the Jacobians at fixed random poses.
+    """
+    x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (16, obj.lower.size))
+    d = obj.tool_jacobian(x)
+    jac = obj.linear_residuals(np.swapaxes(d.jp, 1, 2), np.swapaxes(d.ju, 1, 2))  # (16, m, r)
+    u, sv, _ = np.linalg.svd(np.concatenate(jac, axis=0).T, full_matrices=False)
+    rank = int(np.max(np.linalg.matrix_rank(jac, tol=1e-9 * sv[0])))
+    idle = np.all(np.abs(jac) <= 1e-9 * sv[0], axis=(0, 2))
+    moving = sv > 1e-9 * sv[0]
+    rows = u[:, moving].T if not moving.all() else np.eye(len(sv))    # all: as they are
+    return rows, rank, idle
 
 
 def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
