@@ -57,15 +57,19 @@ def _box(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
 def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
                       ) -> tuple[float, np.ndarray | None]:
     """
-    Return the least motion time SLSQP finds from ``starts`` random points, and its joint goal.
+    Return the least motion time SLSQP finds from ``starts`` random points and the start.
 
-    The problem is min t over (x, t) subject to c(x) = 0 (``Objective.residuals``), omega_i t
-    >= |x_i - s_i| and the search box; a solve counts when its error is below 1e-9 m (and, in
-    radial mode, its axis within 1e-9 rad of the goal ray). The search box is the objective's
-    (one turn for a joint with a wider range). (inf, None) when no solve counts.
+    Also return its joint goal. The start (clipped into the search box) is one more point: the
+    fastest joint goal can lie in a narrow basin beside it, which random points miss (a Panda
+    goal at 2.09 s, where 48 random points found 7.34 s). The problem is min t over (x, t)
+    subject to c(x) = 0 (``Objective.residuals``), omega_i t >= |x_i - s_i| and the search
+    box; a solve counts when its error is below 1e-9 m (and, in radial mode, its axis within
+    1e-9 rad of the goal ray). The search box is the objective's (one turn for a joint with a
+    wider range). (inf, None) when no solve counts.
     """
     best_time, best = np.inf, None
-    for x0 in rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)):
+    start = np.clip(obj.start[: obj.lower.size], obj.lower, obj.upper)
+    for x0 in np.vstack((rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)), start)):
         x = local_minimax(obj, x0)
         t = np.inf if x is None else obj.motion_time(x[None])[0]
         if t < best_time:
