@@ -250,24 +250,3 @@ def test_a_fast_goal_beside_the_start_is_found_from_any_plan_seed() -> None:
         result = plan(goal, start, arm=arm, seed=seed)
         assert result.success
         assert result.motion_time_s == pytest.approx(2.0901405, rel=1e-6)
-
-
-@pytest.mark.parametrize('mode, polishes', [('radial', [61 + 24]), ('free', [16 + 1 + 30])])
-def test_the_multistart_polishes_in_stages_only_without_the_curve_search(
-        mode: str, polishes: list) -> None:
-    # free mode on the Panda (no curves): the first stage, the swarms' 16 candidates, the start
-    # and half the 60 kept probes (the goal's answers agree: no second stage); radial mode
-    # (curves of six planned joints, which the curve search follows too): every kept probe in
-    # one polish (12 swarms' 24 candidates, the start, 60 probes), for there the first stage's
-    # answers seldom agree and two polishes cost more than one
-    arm = published('panda')
-    goal = [0.556563, -0.108487, 0.719156]
-    start = [0.480127, 0.351491, -2.787241, -0.287088, -1.420073, 0.401152, -0.642509]
-    sizes = []
-    original = iepso_module._first_polish
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(iepso_module, '_first_polish', lambda obj, points, *a: (
-            sizes.append(len(points)) or original(obj, points, *a)))
-        result = plan(goal, start, arm=arm, mode=mode, seed=3)
-    assert result.success
-    assert sizes == polishes

@@ -60,10 +60,10 @@ Additions of ours, documented in the README, each on by default because it measu
   optima on a joint limit, at the end of an arc, and on a base or elbow branch that no swarm
   visited, which the swarms and a local polish miss now and then (0.1 % to 0.2 % of goals in
   tuning runs); ``curve_search=0`` turns it off. Elsewhere (``_by_multistart``) a
-  multi-start polish from ``WIDE_PROBES`` times as many screened probes (the slower half only
-  where the first stage's answers do not agree, ``STAGE_AGREEMENT``) and the polish
-  round's candidates (``_multistart``) takes its place (isolated solutions in free mode, sets
-  of two or more dimensions) and joins it on the longer curves of six planned joints;
+  multi-start polish from ``WIDE_PROBES`` times as many screened probes, the start and the
+  polish round's candidates (``_multistart``) takes its place (isolated solutions in free
+  mode, sets of two or more dimensions) and joins it on the longer curves of six planned
+  joints;
 * the answer (``_answer``) is the fastest p_g on the goal (error at most ``ON_GOAL``, 1e-9 m);
   among equally fast ones (a stretch of solutions along which the slowest joint does not move)
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
@@ -133,20 +133,6 @@ PROJECT_STEPS = 8
 MULTISTART_PRUNED = (10, 24)
 MULTISTART_VERTEX_STEPS = 3
 ROUND_TRUST = 0.5
-#: The multi-start's two stages: the first polishes the swarms' candidates and the
-#: ``FIRST_STAGE`` share of the kept probes whose projections are fastest; the others are
-#: polished only when fewer than ``STAGE_AGREEMENT`` of those agree on the answer (on the
-#: goal, within 1e-6 of the fastest time, ``_agreeing``): many independent starts landing on
-#: one fastest solution show its basin is wide. On the dev goals above, at the same misses (3
-#: of 1920, 3 of 54, and 2 of 800 radial Panda goals) the median fell by about 17 % on the
-#: 6- and 7-joint arms (Panda 29 -> 24 ms) and the mean stayed (30 ms: a third of the goals
-#: take the second stage); with 5 or 3 agreeing, 5 and 7 of the 1920 goals were missed. Not
-#: where the curve search follows the multi-start (radial mode on six planned joints): there
-#: the first stage's answers, isolated points on curves, seldom agree; 70 % of 60 Panda dev
-#: goals took the second stage, and the two stages took 29 ms at the median against 25 ms in
-#: one.
-FIRST_STAGE = 0.5
-STAGE_AGREEMENT = 8
 
 #: Trust radius (rad) above which a candidate in a polish round still counts as converging
 #: (``_polish_is_enough``): a fifth of the polish's, after three rejected steps in a row.
@@ -392,13 +378,11 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     curves, before them on curves of six planned joints (so that the curves run through its
     answer).
     """
-    curves = curve_constraint(obj) is not None
     if _by_multistart(obj):
         members = _round_members(swarm, rng, count)
         probed = _probes(obj, rng, probes * WIDE_PROBES)
-        _keep_fastest(swarm, obj, _multistart(obj, members, probed, 2 * steps,
-                                              staged=not curves))
-    if curves:
+        _keep_fastest(swarm, obj, _multistart(obj, members, probed, 2 * steps))
+    if curve_constraint(obj) is not None:
         best = _answer(swarm, obj)
         here = obj(best[None, :])
         _keep_fastest(swarm, obj, _along_curves(obj, rng, best, bool(here.error[0] <= ON_GOAL),
@@ -483,8 +467,8 @@ def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
     return np.concatenate((uniform, around))
 
 
-def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int,
-                staged: bool = True) -> np.ndarray:
+def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int
+                ) -> np.ndarray:
     """
     Return the swarms' candidates and the best probes polished, the fastest further (ours).
 
@@ -496,34 +480,21 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     found 7.34 s on half the plan seeds) and the kept probes (as drawn: the
     polish from there, with steps as long as ``WIDE_TRUST``, reaches more of the fast minima
     than from the projections) are polished ``steps`` steps (vertex steps first,
-    ``MULTISTART_VERTEX_STEPS``; the batch cut near the end, ``MULTISTART_PRUNED``), in two
-    stages where ``staged``: the slower half of the kept probes only when fewer than
-    ``STAGE_AGREEMENT`` of the first agree (``FIRST_STAGE``). Then the ``FINISHED`` fastest
-    on the goal ``FINISH_STEPS`` steps more.
+    ``MULTISTART_VERTEX_STEPS``; the batch cut near the end, ``MULTISTART_PRUNED``), then the
+    ``FINISHED`` fastest on the goal ``FINISH_STEPS`` steps more.
     """
     projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
     ev = obj(projected)
     keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
-    kept = probes[keep[: len(probes) // SCREENED]]
-    split = int(round(FIRST_STAGE * len(kept))) if staged else len(kept)
     start = np.clip(obj.start[: obj.arm.planned], obj.lower, obj.upper)
-    points = np.concatenate((bests, start[None, :], kept[:split]))
+    points = np.concatenate((bests, start[None, :], probes[keep[: len(probes) // SCREENED]]))
     trust = np.where(np.arange(len(points)) < len(bests), ROUND_TRUST, WIDE_TRUST)
-    first = _first_polish(obj, points, trust, steps)
+    first = polish_candidates(obj, points, max_steps=steps, trust=trust,
+                              prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS)
     ev = obj(first)
-    if split < len(kept) and _agreeing(ev.motion_time, ev.error, ON_GOAL)[0] < STAGE_AGREEMENT:
-        first = np.concatenate((first, _first_polish(obj, kept[split:], WIDE_TRUST, steps)))
-        ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > ON_GOAL))[:FINISHED]
     finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS)
     return settle(obj, np.concatenate((first, finished)), ON_GOAL)
-
-
-def _first_polish(obj: Objective, points: np.ndarray, trust: float | np.ndarray, steps: int
-                  ) -> np.ndarray:
-    """Return the multi-start's first polish of ``points`` (``_multistart``)."""
-    return polish_candidates(obj, points, max_steps=steps, trust=trust,
-                             prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS)
 
 
 def _restart(swarm: _Swarms, obj: Objective, rng: np.random.Generator, tol: float) -> int:
