@@ -468,7 +468,7 @@ def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
     limits (so some joints sit on them).
     """
     drawn = SCREENED * count
-    start = obj.start[: obj.arm.planned]
+    start = obj.planned_start
     sigma = np.exp(rng.uniform(np.log(0.2), np.log(2.0), (drawn // 2, 1)))
     around = np.clip(start + sigma * rng.standard_normal((drawn // 2, start.size)),
                      obj.lower, obj.upper)
@@ -495,7 +495,7 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
     ev = obj(projected)
     keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
-    start = np.clip(obj.start[: obj.arm.planned], obj.lower, obj.upper)
+    start = np.clip(obj.planned_start, obj.lower, obj.upper)
     points = np.concatenate((bests, start[None, :], probes[keep[: len(probes) // SCREENED]]))
     trust = np.where(np.arange(len(points)) < len(bests), ROUND_TRUST, WIDE_TRUST)
     first = polish_candidates(obj, points, max_steps=steps, trust=trust,
@@ -544,7 +544,7 @@ def _fastest(obj: Objective, x: np.ndarray, error: np.ndarray) -> int | None:
     tied = time <= time.min() * (1 + 1e-7)
     if np.any(tied & (error <= SETTLED)):
         tied &= error <= SETTLED
-    travel = np.abs(x - obj.start[: obj.arm.planned]).sum(axis=1)
+    travel = np.abs(x - obj.planned_start).sum(axis=1)
     return int(np.argmin(np.where(tied, travel, np.inf)))
 
 

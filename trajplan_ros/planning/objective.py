@@ -104,13 +104,15 @@ class Objective:
         #: angle, as moving them could only add time.
         self.arm = arm = arm.without_idle_tail(self.radial)
         m = arm.planned
+        #: The planned joints' start angles.
+        self.planned_start = self.start[:m]
         #: The search box: the joint limits and, for a joint whose range spans more than a turn
         #: (a continuous joint, or limits of +-2 pi), one turn [w, w + 2 pi] with
         #: w = clip(start - pi, lower, upper - 2 pi): q and q +- 2 pi are the same pose, and that
         #: turn holds, of every pose, the angle within the limits nearest the start.
         lower, upper = arm.lower[:m], arm.upper[:m]
         turn = upper - lower > 2.0 * np.pi
-        window = np.clip(self.start[:m] - np.pi, lower, upper - 2.0 * np.pi)
+        window = np.clip(self.planned_start - np.pi, lower, upper - 2.0 * np.pi)
         self.lower = np.where(turn, window, lower)
         self.upper = np.where(turn, window + 2.0 * np.pi, upper)
         #: Each planned joint's angular velocity omega_i (rad/s), and omega / omega_i.
@@ -222,7 +224,7 @@ class Objective:
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
         """Return R of eq. (10), max_i |x_i - start_i| / omega_i, for x (N, planned)."""
-        moved = np.abs(x - self.start[: self.arm.planned])
+        moved = np.abs(x - self.planned_start)
         if not self._uniform:
             moved = moved * self.time_scale
         # a fold over the few joints is several times faster than np.max(..., axis=1)

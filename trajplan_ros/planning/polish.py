@@ -403,7 +403,7 @@ class Linearisation:
         self.c = obj.residuals(d.p, d.u)
         self.time = obj.motion_time(x)
         self.error = obj.errors(d.p, d.u)
-        travel = np.abs(x - obj.start[: obj.arm.planned]).sum(axis=1)
+        travel = np.abs(x - obj.planned_start).sum(axis=1)
         size = (np.sqrt(np.einsum('kr,kr->k', self.c, self.c)) if obj.radial
                 else self.error)                             # free mode: c = p - goal
         self.merit = self.time * obj.omega + _TRAVEL_WEIGHT * travel + weight * size
@@ -505,7 +505,7 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
     correction: chord Newton steps with the Jacobian at x, each within the trust radius.
     """
     lo, hi, scale = obj.lower, obj.upper, obj.time_scale
-    start = obj.start[: obj.arm.planned]
+    start = obj.planned_start
     base = x + _within(here.newton(here.c), radius)
     if wide:
         base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius,
