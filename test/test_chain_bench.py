@@ -41,6 +41,17 @@ def test_the_independent_fk_is_yourdfpys_and_agrees_with_ours() -> None:
         assert np.allclose(p, ours[0][0], atol=1e-12) and np.allclose(u, ours[1][0], atol=1e-12)
 
 
+def test_the_independent_fk_follows_moves_below_its_scene_graphs_tolerance() -> None:
+    # trimesh keeps an edge whose new transform is allclose (1e-8) to the old one
+    so101 = PUBLISHED['so101']
+    arm = ArmModel.from_urdf(so101.urdf, so101.base_link, so101.tip_link)
+    fk = IndependentFk(str(so101.urdf), arm)
+    q = np.array([1.5, arm.lower[1], -1.4, -1.3, 1.6])
+    fk.tool(q)
+    q[1] += 5e-9
+    assert np.linalg.norm(fk.tool(q)[0] - arm.tool(q[None])[0][0]) <= 1e-14
+
+
 def test_radial_goals_without_a_radial_pose_are_dropped() -> None:
     so101 = PUBLISHED['so101']
     arm = ArmModel.from_urdf(so101.urdf, so101.base_link, so101.tip_link)

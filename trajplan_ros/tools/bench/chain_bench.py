@@ -198,8 +198,17 @@ class IndependentFk:
         self._arm = arm
 
     def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return the tool point and axis (3,) in the base frame for joint angles q."""
-        self._model.update_cfg(dict(zip(self._arm.joint_names, q)))
+        """
+        Return the tool point and axis (3,) in the base frame for joint angles q.
+
+        trimesh's scene graph keeps a joint's old transform when the new one is within 1e-8 of
+        it (``allclose``): a joint moved less than that since the last call (one answer on a
+        limit, the next within 1e-8 rad of it) would give an error of up to some 1e-9 m. So
+        every joint is first moved by 1 rad.
+        """
+        names = self._arm.joint_names
+        self._model.update_cfg(dict(zip(names, np.asarray(q, dtype=float) + 1.0)))
+        self._model.update_cfg(dict(zip(names, q)))
         tip = self._model.get_transform(frame_to=self._arm.tip_link,
                                         frame_from=self._arm.base_link)
         return (tip[:3, :3] @ self._arm.tool_point + tip[:3, 3],
