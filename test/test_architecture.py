@@ -20,7 +20,7 @@ ALLOWED = {
     'kinematics': set(),
     'planning': {'kinematics'},
     'ros': {'kinematics', 'planning'},
-    'tools': {'kinematics', 'planning'},
+    'tools': {'kinematics', 'planning', 'ros'},   # the node's clients share its conventions
 }
 #: Top-level names of ROS 2 Python packages: none may appear in the numpy core.
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'geometry_msgs', 'nav_msgs', 'sensor_msgs',

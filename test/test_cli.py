@@ -139,3 +139,39 @@ def test_bad_arm_arguments_exit_2_with_one_line(argv, reason, capsys):
     assert main(['plan', *TARGET, *argv]) == 2
     err = capsys.readouterr().err
     assert reason in err and err.count('\n') == 1
+
+
+@pytest.mark.parametrize('command', [None, 'plan', 'call', 'goal', 'bench', 'figures', 'urdf',
+                                     'demo'])
+def test_every_help_works(command, capsys):
+    with pytest.raises(SystemExit) as exited:
+        main([command, '--help'] if command else ['--help'])
+    assert exited.value.code == 0
+    assert capsys.readouterr().out.startswith('usage: trajplan')
+
+
+def test_angular_velocity_sets_the_servo_speed(capsys):
+    assert main(['plan', *TARGET, '--json']) == 0
+    slow = json.loads(capsys.readouterr().out)
+    assert main(['plan', *TARGET, '--json', '--angular-velocity', '1.0']) == 0
+    fast = json.loads(capsys.readouterr().out)
+    assert fast['motion_time_s'] == pytest.approx(slow['motion_time_s'] * 0.2, rel=1e-9)
+    assert main(['plan', *TARGET, '--angular-velocity', '0']) == 2
+    assert 'must be positive' in capsys.readouterr().err
+
+
+def test_trajectory_is_the_message_as_published(capsys):
+    assert main(['plan', *TARGET, '--json', '--trajectory', '--sample-period', '0.5']) == 0
+    record = json.loads(capsys.readouterr().out)
+    trajectory = record['trajectory']
+    assert trajectory['joint_names'] == record['joint_names']
+    points = trajectory['points']
+    times = [p['time_from_start'] for p in points]
+    assert times[0] > 0 and all(b > a for a, b in zip(times, times[1:]))
+    assert times[-1] == pytest.approx(record['motion_time_s'], abs=1e-9)
+    assert points[-1]['positions'] == record['joint_goal']
+    assert all(p['velocities'] == [] and p['accelerations'] == [] for p in points)
+    assert main(['plan', '1', '1', '1', '--json', '--trajectory']) == 1      # out of reach
+    assert json.loads(capsys.readouterr().out)['trajectory'] is None
+    assert main(['plan', *TARGET, '--trajectory']) == 2
+    assert '--trajectory needs --json' in capsys.readouterr().err

@@ -37,7 +37,7 @@ def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, 
     assert error <= 1e-6                                     # the node's default tolerance
     assert re.search(r'JointTrajectory on joint_trajectory: \d+ points, joints joint1, joint2, '
                      r'joint3, joint4, joint5; header.stamp 0.000000000 \(start now\)', out)
-    assert 'last velocities 0, 0, 0, 0, 0 rad/s' in out
+    assert 'points carry positions' in out
     pid = int(re.search(r'stopped planner_node \(pid (\d+), exit code 0\)', out).group(1))
     assert not os.path.exists(f'/proc/{pid}'), 'the demo left its node running'
     assert 'Traceback' not in out + done.stderr

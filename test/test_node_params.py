@@ -60,6 +60,23 @@ def test_names_follow_the_namespace_and_remapping(planner, peer, trajectories) -
     assert trajectory_to(trajectories, goal).points
 
 
+def test_a_change_that_keeps_the_arm_does_not_log_a_new_arm(planner, peer) -> None:
+    mark = planner.mark()
+    results = peer.set_parameters(NODE, [Parameter('angular_velocity', value=0.3)])
+    try:
+        assert [r.successful for r in results] == [True]
+        planner.wait_for(r'parameters set for the next plan: angular_velocity=0.3', mark)
+        assert not planner.has('arm for the next plan', mark), planner.output
+        mark = planner.mark()
+        results = peer.set_parameters(NODE, [Parameter('arm.joint_names',
+                                                       value=['a', 'b', 'c', 'd', 'e'])])
+        assert [r.successful for r in results] == [True]
+        planner.wait_for(r'arm for the next plan: 5-joint arm \(a, b, c, d, e\)', mark)
+    finally:
+        peer.set_parameters(NODE, [Parameter('angular_velocity', value=0.2),
+                                   Parameter('arm.joint_names', value=list(PAPER.joint_names))])
+
+
 def test_a_valid_change_takes_effect_for_the_next_plan(planner, peer, trajectories) -> None:
     names = ['base_yaw', 'shoulder', 'elbow', 'wrist', 'tool_roll']
     results = peer.set_parameters(NODE, [Parameter('angular_velocity', value=0.5),

@@ -120,7 +120,9 @@ def test_each_joint_turns_at_most_at_its_velocity_limit() -> None:
     moved = np.abs(result.joint_goal - result.start)
     assert result.motion_time_s == pytest.approx(np.max(moved / speeds), rel=1e-12)
     traj = result.trajectory(slow)
-    assert np.all(np.abs(traj.velocities) <= speeds + 1e-12)
+    moved = np.diff(np.vstack((traj.start, traj.positions)), axis=0)
+    velocity = moved / np.diff(traj.times, prepend=0.0)[:, None]
+    assert np.all(np.abs(velocity) <= speeds * (1 + 1e-9))
     assert traj.duration == pytest.approx(result.motion_time_s)
 
 
@@ -180,7 +182,36 @@ def test_bad_chains_are_refused_with_a_reason(text, base, tip, reason) -> None:
 def test_a_huge_tool_offset_is_refused() -> None:
     so101 = PUBLISHED['so101']
     with pytest.raises(InvalidArmModel, match='not an arm'):
-        ArmModel.from_urdf(so101.urdf, tool_offset=(1e308, 1e308, 0.0))
+        ArmModel.from_urdf(so101.urdf, so101.base_link, so101.tip_link,
+                           tool_offset=(1e308, 1e308, 0.0))
+
+
+def test_a_gripper_jaw_is_not_taken_for_the_tip() -> None:
+    # the SO-101's last revolute joint moves the jaw, a leaf beside gripper_frame_link
+    so101 = PUBLISHED['so101']
+    with pytest.raises(InvalidArmModel, match=r'the tip link is ambiguous: the last revolute '
+                       r"joint 'gripper' moves the leaf link 'moving_jaw_so101_v1_link' .*one "
+                       r"of 'moving_jaw_so101_v1_link', 'gripper_frame_link'$"):
+        ArmModel.from_urdf(so101.urdf)
+    assert ArmModel.from_urdf(so101.urdf, tip_link='gripper_frame_link').n_joints == 5
+    assert ArmModel.from_urdf(so101.urdf, tip_link='moving_jaw_so101_v1_link').n_joints == 6
+    # a chain whose last joint's child is a leaf with no sibling keeps today's rule
+    joints = [('j1', 'revolute'), ('j2', 'revolute')]
+    assert ArmModel.from_urdf(_chain_urdf(joints)).n_joints == 2
+    frame = ('<link name="frame"/><joint name="f" type="fixed"><parent link="l1"/>'
+             '<child link="frame"/></joint>')
+    with pytest.raises(InvalidArmModel, match=r"one of 'l2', 'frame'$"):
+        ArmModel.from_urdf(_chain_urdf(joints, frame))
+
+
+def test_an_unknown_link_is_refused_with_the_links_names() -> None:
+    so101 = PUBLISHED['so101']
+    with pytest.raises(InvalidArmModel, match=r"unknown link 'nosuch'; the URDF has 8 links: "
+                                              r'base_link, shoulder_link, .*, gripper_frame_link'):
+        ArmModel.from_urdf(so101.urdf, tip_link='nosuch')
+    many = _chain_urdf([(f'j{i}', 'fixed') for i in range(30)])
+    with pytest.raises(InvalidArmModel, match=r'has 31 links: l0, l1, .*, l19 and 11 more$'):
+        ArmModel.from_urdf(many, tip_link='nosuch')
 
 
 BILLION_LAUGHS = '<?xml version="1.0"?><!DOCTYPE lolz [<!ENTITY lol "lol">' + ''.join(

@@ -12,7 +12,7 @@ Forward kinematics is vectorised over an (N, n_joints) array of configurations.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 import os
 from typing import Sequence
 
@@ -309,6 +309,11 @@ class ArmModel:
     def n_joints(self) -> int:
         """Return the number of joints in the chain."""
         return self.translations.shape[0]
+
+    def same_as(self, other: ArmModel) -> bool:
+        """Return True when ``other`` is the same arm: every field equal (arrays exactly)."""
+        return all(np.array_equal(getattr(self, f.name), getattr(other, f.name))
+                   for f in fields(self) if f.compare)
 
     @property
     def continuous(self) -> np.ndarray:

@@ -20,7 +20,9 @@ of 0, a placeholder in many files, means none).
 
 With no ``base_link`` the URDF's root is the base; with no ``tip_link`` the tip is the child
 link of the last revolute joint of the only longest-reaching chain of revolute joints below the
-base (ignoring fixed links after it); when there are several, the refusal lists them.
+base (ignoring fixed links after it); when there are several, the refusal lists them. When that
+chain's last joint moves a leaf link whose parent carries another link too (a gripper's jaw
+beside the tool frame, as on the SO-101), the tip is not guessed either: the refusal names both.
 """
 from __future__ import annotations
 
@@ -161,7 +163,27 @@ def _default_tip(robot: yourdfpy.Robot, parents: dict[str, yourdfpy.Joint], base
             f'no revolute joint below link {base!r}' if not tips else
             f'the tip link is ambiguous: the revolute chains below {base!r} end at '
             f'{", ".join(tips)}; name the tip link')
+    _refuse_a_jaw(robot, by_name[ends[0]])
     return tips[0]
+
+
+def _refuse_a_jaw(robot: yourdfpy.Robot, last: yourdfpy.Joint) -> None:
+    """
+    Refuse to guess when the chain's last joint may be a gripper's jaw.
+
+    That is when its child is a leaf and its parent link carries another link too (the SO-101:
+    the jaw beside ``gripper_frame_link``): either may be the tip that is meant.
+    """
+    children: dict[str, list[str]] = {}
+    for joint in robot.joints:
+        children.setdefault(joint.parent, []).append(joint.child)
+    siblings = [c for c in children.get(last.parent, []) if c != last.child]
+    if last.child not in children and siblings:
+        raise InvalidArmModel(
+            f'the tip link is ambiguous: the last revolute joint {last.name!r} moves the leaf '
+            f'link {last.child!r} (a gripper jaw?) beside {", ".join(map(repr, siblings))} on '
+            f'link {last.parent!r}; name the tip link, one of '
+            f'{", ".join(map(repr, [last.child, *siblings]))}')
 
 
 def _to_axis(axis: np.ndarray) -> np.ndarray:
@@ -215,10 +237,13 @@ def read_chain(urdf: str | os.PathLike | bytes, base_link: str | None = None,
     """Return the chain of a URDF (see the module docstring; ``ArmModel.from_urdf``)."""
     robot = read_urdf(urdf)
     parents = _parents(robot)
-    known = {link.name for link in robot.links}
+    known = [link.name for link in robot.links]
     for name in (base_link, tip_link):
         if name is not None and name not in known:
-            raise InvalidArmModel(f'unknown link {name!r}; the URDF has {len(known)} links')
+            shown = ', '.join(known[:20]) + (f' and {len(known) - 20} more'
+                                             if len(known) > 20 else '')
+            raise InvalidArmModel(f'unknown link {name!r}; the URDF has {len(known)} links: '
+                                  f'{shown}')
     base = base_link if base_link is not None else _default_base(robot, parents)
     tip = tip_link if tip_link is not None else _default_tip(robot, parents, base)
     pending, links, values = np.eye(4), [], []

@@ -7,15 +7,21 @@ Joint i leaves q_start_i at t = 0 towards q_goal_i at +-omega and stops when it 
 t_i = |q_goal_i - q_start_i| / omega (omega may be one per joint: a joint whose velocity limit is
 lower turns at its limit, ``ArmModel.speeds``); the motion ends at R = max_i t_i (eq. 10). The
 trajectory is sampled every ``sample_period`` seconds, plus one point at each joint's arrival
-and at the end, so the samples are exact corners of the motion. Points carry positions and
-velocities; the last has zero velocity everywhere. Times are strictly increasing and above
-zero, the form joint_trajectory_controller accepts (the first point is not the start itself).
-``trajectory_points`` counts those points without building them, to refuse a long trajectory
-first.
+and at the end, so the samples are exact corners of the motion.
+
+A ``Trajectory`` is what the JointTrajectory message carries. Its times are whole nanoseconds
+(the message's resolution; the end rounded up), strictly increasing and above zero (the first
+point is not the start itself), and each point's positions are the motion's at its rounded
+time. Servo points carry positions only: joint_trajectory_controller then interpolates each
+segment linearly, which is this motion exactly, never faster than omega (with velocities it
+would fit cubics through the velocity steps and overshoot). After the last point the
+controller holds it, at rest. ``trajectory_points`` counts the points without building them, to
+refuse a long trajectory first.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -27,25 +33,55 @@ _RESOLUTION = 1e-6
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Time-stamped joint positions (rad) and velocities (rad/s), one row per point."""
+    """
+    A joint trajectory as the JointTrajectory message carries it, from the start at t = 0.
+
+    ``velocities`` and ``accelerations`` are None where the points do not carry them (servo
+    points carry positions only).
+    """
 
     joint_names: tuple[str, ...]
-    times: np.ndarray          # (T,) s from start, strictly increasing, > 0
-    positions: np.ndarray      # (T, n_joints)
-    velocities: np.ndarray     # (T, n_joints)
+    start: np.ndarray          # (n_joints,) rad at t = 0, the state the controller starts from
+    times: np.ndarray          # (T,) s from start, whole nanoseconds, strictly increasing, > 0
+    positions: np.ndarray      # (T, n_joints) rad
+    velocities: np.ndarray | None = None       # (T, n_joints) rad/s, or None
+    accelerations: np.ndarray | None = None    # (T, n_joints) rad/s^2, or None
 
     @property
     def duration(self) -> float:
         """Return the time of the last point, s."""
         return float(self.times[-1])
 
+    @property
+    def nanoseconds(self) -> list[int]:
+        """Return each point's time_from_start in whole nanoseconds."""
+        return np.round(self.times * 1e9).astype(np.int64).tolist()
+
     def sample(self, t: np.ndarray) -> np.ndarray:
-        """Return positions at times t (clamped to [0, duration]) by linear interpolation."""
+        """Return positions at times t (clamped to [0, duration]), linear between points."""
         t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
-        start = self.positions[0] - self.velocities[0] * self.times[0]
         times = np.concatenate(([0.0], self.times))
-        pos = np.vstack((start, self.positions))
+        pos = np.vstack((self.start, self.positions))
         return np.stack([np.interp(t, times, pos[:, j]) for j in range(pos.shape[1])], axis=-1)
+
+    def to_dict(self) -> dict[str, Any]:
+        """
+        Return the message as JSON-ready data: joint names and points, fields as carried.
+
+        ``{"joint_names": [...], "points": [{"time_from_start": s, "positions": [...],
+        "velocities": [...], "accelerations": [...]}]}``, an empty list where the points leave
+        a field empty; ``time_from_start`` is the point's whole nanoseconds in seconds.
+        """
+        rows = len(self.times)
+        fields = {name: (values.tolist() if values is not None else [[]] * rows)
+                  for name, values in (('positions', self.positions),
+                                       ('velocities', self.velocities),
+                                       ('accelerations', self.accelerations))}
+        points = [{'time_from_start': ns / 1e9, 'positions': fields['positions'][k],
+                   'velocities': fields['velocities'][k],
+                   'accelerations': fields['accelerations'][k]}
+                  for k, ns in enumerate(self.nanoseconds)]
+        return {'joint_names': list(self.joint_names), 'points': points}
 
 
 def _motion(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,
@@ -75,12 +111,12 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float | np.ndar
     Return the fixed-angular-velocity motion from ``start`` to ``goal`` ((n_joints,), rad).
 
     A start equal to the goal (or within a microsecond of motion of it) gives one point at
-    ``sample_period`` with zero velocity. A joint whose own motion is that short is not sampled
-    at its arrival, so no point lands at the start itself.
+    ``sample_period``. A joint whose own motion is that short is not sampled at its arrival, so
+    no point lands at the start itself. Each time is rounded to whole nanoseconds (an arrival and
+    the end up, so that the joint has arrived) and the positions are computed at those times.
     """
     start, goal, arrive, duration = _motion(start, goal, omega, sample_period)
     names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
-    delta = goal - start
     if duration <= _RESOLUTION:
         t = np.array([sample_period])
     else:
@@ -89,13 +125,14 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float | np.ndar
         t = t[(t > _RESOLUTION) & (t <= duration)]
         # merge samples closer than a microsecond (a grid point on an arrival time)
         t = t[np.concatenate((np.diff(t) > _RESOLUTION, [True]))]
-        t[-1] = duration
-    direction = np.sign(delta)
-    moving = t[:, None] < arrive[None, :] - 1e-12
-    positions = start + direction * omega * np.minimum(t[:, None], arrive[None, :])
-    positions[-1] = goal
-    velocities = np.where(moving, direction * omega, 0.0)
-    return Trajectory(tuple(names), t, positions, velocities)
+    # whole nanoseconds; an arrival (and the end) rounded up, so the joint is there by then
+    ns = np.where(np.isin(t, arrive), np.ceil(t * 1e9), np.round(t * 1e9))
+    ns[-1] = np.ceil(max(t[-1], duration) * 1e9)
+    t = ns / 1e9
+    turned = np.sign(goal - start) * omega * t[:, None]
+    positions = np.where(t[:, None] >= arrive[None, :], goal, start + turned)
+    positions[-1] = goal                         # its time is at least R (up to its rounding)
+    return Trajectory(tuple(names), start, t, positions)
 
 
 def trajectory_points(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,

@@ -46,11 +46,14 @@ class Outcome:
 
     succeeded: bool
     log: str
+    status: str                              # PlanStatus's value, or 'refused'
+    reason: str                              # the plan's message, for the caller
     path: Path | None = None                 # built at once for a call: it is the answer
     trajectory: Trajectory | None = None     # converted when published, after the answer
     settings: Settings | None = None         # the settings it was planned with
     plan_time_s: float | None = None
     timed_out: bool = False                  # ended at max_planning_time
+    motion_time_s: float | None = None       # of a published trajectory
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -72,17 +75,20 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     timed = result.plan_time_s if result.joint_goal is not None else None
     if not result.success:
-        return Outcome(False, _refusal(where, result, took), plan_time_s=timed,
+        return Outcome(False, _refusal(where, result, took), result.status.value,
+                       result.message, plan_time_s=timed,
                        timed_out=result.status is PlanStatus.TIMED_OUT)
     points = trajectory_points(result.start, result.joint_goal, s.arm.speeds(s.omega),
                                s.sample_period)
     if points > s.max_trajectory_points:
-        return Outcome(False, f'{where}: refused: the trajectory would need {points} points, '
-                              f'more than max_trajectory_points {s.max_trajectory_points} '
-                              f'(motion {result.motion_time_s:.3f} s at sample_period '
-                              f'{s.sample_period:g} s); {took}', plan_time_s=timed)
+        reason = (f'the trajectory would need {points} points, more than '
+                  f'max_trajectory_points {s.max_trajectory_points} (motion '
+                  f'{result.motion_time_s:.3f} s at sample_period {s.sample_period:g} s)')
+        return Outcome(False, f'{where}: refused: {reason}; {took}', 'refused', reason,
+                       plan_time_s=timed)
     traj = result.trajectory(s.arm, s.sample_period)
     path = path_msg(s.arm, traj, header, blanks) if job.is_call else None
     return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
-                         f'points over {traj.duration:.3f} s',
-                   path=path, trajectory=traj, settings=s, plan_time_s=timed)
+                         f'points over {traj.duration:.3f} s', result.status.value,
+                   result.message, path=path, trajectory=traj, settings=s,
+                   plan_time_s=timed, motion_time_s=result.motion_time_s)

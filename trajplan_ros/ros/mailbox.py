@@ -38,6 +38,7 @@ class Job:
     goal: tuple[float, float, float]
     tolerance: float | None = None
     future: Any = None
+    stamp: tuple[int, int] | None = None     # a call's goal.header.stamp (sec, nanosec)
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan

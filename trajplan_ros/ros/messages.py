@@ -42,12 +42,20 @@ def quaternions(rot: np.ndarray) -> np.ndarray:
 
 
 def trajectory_msg(traj: Trajectory) -> JointTrajectory:
-    """Build the JointTrajectory of ``traj``; header.stamp stays zero ("start now")."""
+    """
+    Build the JointTrajectory of ``traj``; header.stamp stays zero ("start now").
+
+    Each point carries the fields ``traj`` carries (servo points: positions only).
+    """
     msg = JointTrajectory(joint_names=list(traj.joint_names))
-    nanoseconds = np.round(traj.times * 1e9).astype(np.int64).tolist()
+    rows = len(traj.times)
+    velocities = traj.velocities if traj.velocities is not None else [()] * rows
+    accelerations = traj.accelerations if traj.accelerations is not None else [()] * rows
     points = []
-    for ns, q, v in zip(nanoseconds, traj.positions, traj.velocities):
-        point = JointTrajectoryPoint(positions=array.array('d', q), velocities=array.array('d', v))
+    for ns, q, v, a in zip(traj.nanoseconds, traj.positions, velocities, accelerations):
+        point = JointTrajectoryPoint(positions=array.array('d', q),
+                                     velocities=array.array('d', v),
+                                     accelerations=array.array('d', a))
         point.time_from_start.sec, point.time_from_start.nanosec = divmod(ns, 1_000_000_000)
         points.append(point)
     msg.points = points

@@ -12,6 +12,8 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   response's plan is the tool path of the trajectory, one pose per point (empty on failure).
 * ``joint_trajectory`` (out), ``planned_path`` (nav_msgs/msg/Path, out, for RViz),
   ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
+* ``plan_results`` (diagnostic_msgs/msg/DiagnosticStatus, out): how each goal and call ended
+  and why, with what the caller sent (``ros.outcomes``).
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
 * ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal,
   refused with a logged reason unless its frame is ``base_frame`` (or empty).
@@ -41,6 +43,7 @@ queue of calls is bounded by ``max_queued_calls`` instead. joint_states are take
 from __future__ import annotations
 
 import collections
+import dataclasses
 import itertools
 import math
 import signal
@@ -49,7 +52,7 @@ import threading
 import time
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Point, PointStamped, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
@@ -74,6 +77,7 @@ from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros.outcomes import outcome_status, TOPIC as RESULTS_TOPIC
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
 
 
@@ -84,6 +88,8 @@ KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPol
 #: robot_state_publisher's robot_description: the latest description, also to late joiners.
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: Outcomes on plan_results: reliable, the last 100 kept for a subscriber slow to take them.
+RESULTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 #: After handing over a call's answer, how long the worker may wait (for nothing but the answer
 #: to go out) before it publishes the trajectory and logs, unless new work arrives first.
 ANSWER_GRACE_S = 5e-3
@@ -153,6 +159,7 @@ class PlannerNode(Node):
         self._trajectories = self.create_publisher(JointTrajectory, 'joint_trajectory', 10)
         self._paths = self.create_publisher(Path, 'planned_path', 10)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._results = self.create_publisher(DiagnosticStatus, RESULTS_TOPIC, RESULTS)
         self.create_subscription(Point, 'goal', self._on_goal, KEEP_ALL)
         self.create_subscription(PointStamped, 'clicked_point', self._on_clicked_point, KEEP_ALL)
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
@@ -218,9 +225,11 @@ class PlannerNode(Node):
 
     def _use(self, settings: Settings) -> None:
         """Plan with ``settings`` from the next job; forget the old arm's states if it changed."""
-        before, self._settings = self._settings, settings
-        if settings.arm is before.arm:
+        before = self._settings
+        if settings.arm.same_as(before.arm):                  # e.g. only the speed changed
+            self._settings = dataclasses.replace(settings, arm=before.arm)
             return
+        self._settings = settings
         if settings.arm.joint_names != before.arm.joint_names:
             self._states.forget()
         self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(settings)}')
@@ -236,19 +245,20 @@ class PlannerNode(Node):
             self._give_up(job)
         elif superseded is not None:
             self._counters.add('goals_superseded')
+            reason = f'{job.label} arrived while planning'
             self.get_logger().info(
                 f'superseded {superseded.label} {jobs.describe_goal(superseded.goal)} m: '
-                f'{job.label} arrived while planning')
+                f'{reason}')
+            self._publish_outcome(superseded, 'superseded', reason)
 
     def _on_clicked_point(self, msg: PointStamped) -> None:
         frame, base_frame = msg.header.frame_id, self._settings.base_frame
         if frame and frame != base_frame:
             self._counters.add('goals_received')
             self._counters.add('goals_failed')
-            self.get_logger().warning(
-                f'clicked_point {jobs.describe_goal((msg.point.x, msg.point.y, msg.point.z))} m: '
-                f"refused: it is in frame '{frame}', but this node plans in base_frame "
-                f"'{base_frame}' (it does no frame transforms)")
+            job = Job('clicked_point', (msg.point.x, msg.point.y, msg.point.z))
+            self._refused(job, f"it is in frame '{frame}', but this node plans in base_frame "
+                               f"'{base_frame}' (it does no frame transforms)")
             return
         self._on_goal(msg.point)
 
@@ -260,8 +270,10 @@ class PlannerNode(Node):
         self._counters.add('calls_received')
         s = self._settings
         p = request.goal.pose.position
+        stamp = request.goal.header.stamp
         job = Job(f'service call #{next(self._call_ids)}', (p.x, p.y, p.z),
-                  tolerance=request.tolerance or None, future=Future())
+                  tolerance=request.tolerance or None, future=Future(),
+                  stamp=(stamp.sec, stamp.nanosec))
         response.plan = Path(header=self._header(s.base_frame))
         problem = request_problem(request, s.base_frame)
         admission = None if problem else self._mailbox.put_call(job, s.max_queued_calls)
@@ -283,6 +295,15 @@ class PlannerNode(Node):
     def _refused(self, job: Job, reason: str) -> None:
         self.get_logger().warning(
             f'{job.label} {jobs.describe_goal(job.goal)} m: refused: {reason}')
+        self._publish_outcome(job, 'refused', reason)
+
+    def _publish_outcome(self, job: Job, status: str, reason: str,
+                         motion_time_s: float | None = None) -> None:
+        """Tell ``plan_results`` how ``job`` ended (from either thread; once per job)."""
+        self._results.publish(outcome_status(
+            f'{self.get_fully_qualified_name()}: {job.label}',
+            'service call' if job.is_call else 'goal', job.stamp, job.goal, status, reason,
+            motion_time_s))
 
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
@@ -295,9 +316,10 @@ class PlannerNode(Node):
             try:
                 self._handle(job)
             except Exception as exc:  # noqa: BLE001 - a bug must not end the planning thread
+                reason = f'planning failed: {exc!r}'
                 self.get_logger().error(f'{job.label} {jobs.describe_goal(job.goal)} m: '
-                                        f'planning failed: {exc!r}')
-                self._give_up(job, log=False)
+                                        f'{reason}')
+                self._give_up(job, status='failed', reason=reason)
             self._current = None
 
     def _handle(self, job: Job) -> None:
@@ -331,6 +353,7 @@ class PlannerNode(Node):
                 return
             if not job.is_call:
                 self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
+            self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s)
             if outcome.succeeded:
                 traj = outcome.trajectory
                 self._trajectories.publish(trajectory_msg(traj))
@@ -350,19 +373,24 @@ class PlannerNode(Node):
             first, job.settled = not job.settled, True
             return first
 
-    def _give_up(self, job: Job, log: bool = True) -> None:
-        """End a job unplanned (shutting down, or a fault): answer a call empty, count a goal."""
+    def _give_up(self, job: Job, status: str = 'shut_down', reason: str = '') -> None:
+        """
+        End a job unplanned (shutting down, or a fault): answer a call empty, count a goal.
+
+        At shutdown (no ``reason``) it logs why; a fault was logged already.
+        """
         if job.is_call:
             self._answer(job, None)
         if not self._settle(job):
             return
         if not job.is_call:
             self._counters.add('goals_failed')
-        if log:
+        if not reason:
             given = ('answered with a plan; not published' if job.planned_answer
                      else 'unplanned')
-            self.get_logger().info(
-                f'{job.label} {jobs.describe_goal(job.goal)} m: {given}: shutting down')
+            reason = f'{given}: shutting down'
+            self.get_logger().info(f'{job.label} {jobs.describe_goal(job.goal)} m: {reason}')
+        self._publish_outcome(job, status, reason)
 
     def _answer(self, job: Job, path: Path | None) -> None:
         """Hand a call its answer (once), for the executor thread to complete its Future."""

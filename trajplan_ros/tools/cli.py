@@ -46,7 +46,16 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--max-planning-time', type=finite_number, default=None, metavar='S',
                    help='longest search per goal in seconds; past it the plan ends as timed_out '
                         'with its best answer (default: no limit)')
+    p.add_argument('--angular-velocity', type=finite_number, default=DEFAULT_OMEGA,
+                   metavar='RAD_S', help='servo angular velocity omega in rad/s, capped per '
+                   "joint by its URDF velocity limit (default %(default)s, the node's default)")
     p.add_argument('--json', action='store_true', help='print one JSON object a line')
+    p.add_argument('--trajectory', action='store_true',
+                   help='with --json: add the JointTrajectory the node would publish, as '
+                        '"trajectory": {"joint_names", "points": [{"time_from_start", '
+                        '"positions", "velocities", "accelerations"}]} (null unless planned)')
+    p.add_argument('--sample-period', type=finite_number, default=0.1, metavar='S',
+                   help='time between trajectory points in seconds (default %(default)s)')
     add_arm_arguments(p)
     p.set_defaults(run=_run_plan)
 
@@ -131,13 +140,25 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
     return '\n'.join(lines)
 
 
-def _record(result: PlanResult, line: int | None, arm: ArmModel) -> dict[str, Any]:
+def _record(result: PlanResult, line: int | None, arm: ArmModel,
+            args: argparse.Namespace) -> dict[str, Any]:
     """
     Return the JSON line of a plan: the same keys every time (null where no value).
 
     ``joint_names`` names the entries of ``joint_goal``: the chain's joints from the base.
+    With ``--trajectory``, ``trajectory`` is the message a planned goal gives (else null).
     """
-    return {'line': line, **result.to_dict(), 'joint_names': list(arm.joint_names)}
+    record = {'line': line, **result.to_dict(), 'joint_names': list(arm.joint_names)}
+    if args.trajectory:
+        record['trajectory'] = (result.trajectory(arm, args.sample_period).to_dict()
+                                if result.success else None)
+    return record
+
+
+def _line(result: PlanResult, line: int | None, arm: ArmModel,
+          args: argparse.Namespace) -> str:
+    """Return what ``trajplan plan`` prints for one plan: a JSON line or the human lines."""
+    return json.dumps(_record(result, line, arm, args)) if args.json else _human(result, arm)
 
 
 def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
@@ -145,21 +166,25 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
     """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
                           start=None, algorithm=args.algorithm, mode=args.mode)
-    return {**_record(rejected, line, arm), 'goal': None}
+    return {**_record(rejected, line, arm, args), 'goal': None}
 
 
 def _run_plan(args: argparse.Namespace) -> int:
     arm = arm_from_arguments(args)
+    if args.trajectory and not args.json:
+        raise UsageError('--trajectory needs --json')
+    if not (args.angular_velocity > 0 and args.sample_period > 0):
+        raise UsageError('--angular-velocity and --sample-period must be positive')
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
-                'max_planning_time': args.max_planning_time}
+                'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity}
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
                              f'got {len(args.xyz)} number(s)')
         start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
         result = plan(args.xyz, start, **settings)
-        print(json.dumps(_record(result, None, arm)) if args.json else _human(result, arm))
+        print(_line(result, None, arm, args))
         return 0 if result.success else 1
     if args.xyz:
         raise UsageError('give either X Y Z or --goals FILE, not both')
@@ -180,7 +205,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             start = args.start
         result = plan(goal, start, **settings)
         failures += not result.success
-        print(json.dumps(_record(result, number, arm)) if args.json else _human(result, arm))
+        print(_line(result, number, arm, args))
     return 0 if failures == 0 else 1
 
 

@@ -5,7 +5,10 @@
 
 They do what ``ros2 service call plan_trajectory nav_msgs/srv/GetPlan ...`` and
 ``ros2 topic pub --once goal geometry_msgs/msg/Point ...`` would, for users without the ``ros2``
-command line (it is not on PyPI). Both use the ROS environment as it is (``ROS_DOMAIN_ID``,
+command line (it is not on PyPI). Both subscribe to the node's ``plan_results`` before they
+send, so that a goal the node does not plan comes back with its reason (on stderr, exit 1): a
+call is found there by its request's ``goal.header.stamp``, the client's clock at sending, a
+goal by its point. Both use the ROS environment as it is (``ROS_DOMAIN_ID``,
 ``ROS_AUTOMATIC_DISCOVERY_RANGE``, namespaces through the names given) and import rclpy only
 when they run, so ``trajplan`` works without ROS 2.
 """
@@ -15,7 +18,9 @@ import argparse
 import importlib.util
 import math
 import queue
-from typing import Any
+import sys
+import time
+from typing import Any, Callable
 
 from trajplan_ros.tools.arguments import finite_number, UsageError
 
@@ -55,15 +60,47 @@ def print_trajectory(trajectory: Any, topic: str) -> None:
     print(f'JointTrajectory on {topic}: {len(trajectory.points)} points, joints '
           f"{', '.join(trajectory.joint_names)}; header.stamp {stamp.sec}.{stamp.nanosec:09d} "
           f'(start now); time_from_start {_seconds(first.time_from_start):.3f} .. '
-          f'{_seconds(last.time_from_start):.3f} s; last velocities '
-          f"{', '.join(f'{v:g}' for v in last.velocities)} rad/s")
+          f'{_seconds(last.time_from_start):.3f} s; points carry {_fields(last)}')
 
 
-def _next(box: queue.Queue[Any], timeout: float, what: str) -> Any:
-    try:
-        return box.get(timeout=timeout)
-    except queue.Empty:
-        raise TimeoutError(f'no {what} within {timeout:g} s') from None
+def _fields(point: Any) -> str:
+    """Name the fields a JointTrajectoryPoint carries."""
+    return ', '.join(name for name in ('positions', 'velocities', 'accelerations')
+                     if len(getattr(point, name)))
+
+
+def _next(box: queue.Queue[Any], timeout: float, what: str,
+          mine: Callable[[Any], bool] = lambda _: True) -> Any:
+    """Return the first message in ``box`` that is ``mine``, waiting up to ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            msg = box.get(timeout=max(deadline - time.monotonic(), 0.0))
+        except queue.Empty:
+            raise TimeoutError(f'no {what} within {timeout:g} s') from None
+        if mine(msg):
+            return msg
+
+
+def _outcome(box: queue.Queue[Any], timeout: float, what: str,
+             mine: Callable[[dict[str, str]], bool]) -> tuple[bool, str]:
+    """
+    Wait for the node's outcome of the caller's request; return (planned, its line).
+
+    ``mine`` tells the caller's outcome by its values (``ros.outcomes``).
+    """
+    from trajplan_ros.ros.outcomes import outcome_values, TOPIC
+
+    msg = _next(box, timeout, f'outcome of {what} on {TOPIC}',
+                lambda m: mine(outcome_values(m)))
+    values = outcome_values(msg)
+    return values['status'] == 'succeeded', f"{values['status']}: {msg.message}"
+
+
+def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
+    """Tell a topic goal's outcome by its point (the node writes it back exactly)."""
+    return lambda v: v['request'] == 'goal' and tuple(
+        float(v[axis]) for axis in 'xyz') == tuple(float(c) for c in goal)
 
 
 def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeout: float,
@@ -74,15 +111,24 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     With ``trajectory_topic``, also wait for the trajectory the node publishes there and print
     it (the node answers first, then publishes).
     """
+    from diagnostic_msgs.msg import DiagnosticStatus
     from nav_msgs.srv import GetPlan
     from trajectory_msgs.msg import JointTrajectory
+    from trajplan_ros.ros.outcomes import describe_stamp
     from trajplan_ros.tools.ros_client import plan_request
 
+    ros.client(GetPlan, service, timeout)                 # the node first, then its results
+    results = ros.inbox(DiagnosticStatus, _beside(service, 'plan_results'), timeout)
     box = ros.inbox(JointTrajectory, trajectory_topic, timeout) if trajectory_topic else None
     print(f'calling {service}, goal ({goal[0]}, {goal[1]}, {goal[2]}) m')
-    path = ros.call(GetPlan, service, plan_request(goal, tolerance), timeout).plan
+    request = plan_request(goal, tolerance)
+    request.goal.header.stamp = ros.node.get_clock().now().to_msg()
+    stamp = describe_stamp((request.goal.header.stamp.sec, request.goal.header.stamp.nanosec))
+    path = ros.call(GetPlan, service, request, timeout).plan
     if not path.poses:
-        print('empty plan: the node did not plan this goal (its log says why)')
+        _, line = _outcome(results, timeout, 'the call',
+                           lambda v: v['request'] == 'service call' and v['stamp'] == stamp)
+        print(f'trajplan: not planned: {line}', file=sys.stderr)
         return 1
     if box is not None:
         print_trajectory(_next(box, timeout, f'JointTrajectory on {trajectory_topic}'),
@@ -96,32 +142,51 @@ def _run_call(args: argparse.Namespace) -> int:
     from trajplan_ros.tools.ros_client import RosClient
 
     with RosClient('trajplan_call') as ros:
-        return call_planner(ros, tuple(args.xyz), service=args.service,
+        return call_planner(ros, _goal(args), service=args.service,
                             tolerance=args.tolerance, timeout=args.timeout,
                             trajectory_topic=args.trajectory)
 
 
 def _run_goal(args: argparse.Namespace) -> int:
     _need_rclpy()
+    from diagnostic_msgs.msg import DiagnosticStatus
     from geometry_msgs.msg import Point
     from trajectory_msgs.msg import JointTrajectory
     from trajplan_ros.tools.ros_client import RosClient
 
-    x, y, z = args.xyz
+    x, y, z = goal = _goal(args)
     with RosClient('trajplan_goal') as ros:
+        results = ros.inbox(DiagnosticStatus, _beside(args.topic, 'plan_results'),
+                            args.timeout)
         box = (ros.inbox(JointTrajectory, args.trajectory, args.timeout) if args.trajectory
                else None)
         ros.publish(Point, args.topic, Point(x=x, y=y, z=z), args.timeout)
         print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
+        planned, line = _outcome(results, args.timeout, 'the goal', _is_point(goal))
+        if not planned:
+            print(f'trajplan: not planned: {line}', file=sys.stderr)
+            return 1
+        print(line)
         if box is not None:
             print_trajectory(_next(box, args.timeout, f'JointTrajectory on {args.trajectory}'),
                              args.trajectory)
     return 0
 
 
+def _beside(name: str, topic: str) -> str:
+    """Return ``topic`` in the namespace of ``name`` (``/arm1/goal`` -> ``/arm1/plan_results``)."""
+    namespace, _, _ = name.rpartition('/')
+    return f'{namespace}/{topic}' if namespace or name.startswith('/') else topic
+
+
+def _goal(args: argparse.Namespace) -> Goal:
+    return (args.x, args.y, args.z)
+
+
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument('xyz', nargs=3, type=finite_number, metavar=('X', 'Y', 'Z'),
-                   help="tool goal in metres, in the planner's base frame")
+    for axis in 'xyz':
+        p.add_argument(axis, type=finite_number, metavar=axis.upper(),
+                       help=f"tool goal's {axis} in metres, in the planner's base frame")
     p.add_argument('--timeout', type=float, default=30.0,
                    help='seconds to wait for the node and for each answer (default 30)')
     p.add_argument('--trajectory', metavar='TOPIC', nargs='?', const='joint_trajectory',
@@ -133,8 +198,9 @@ def add_call_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan call``: the planning service, as ``ros2 service call`` would."""
     p = sub.add_parser('call', help="call a running planner node's plan_trajectory service",
                        description='Send a GetPlan request to a running planner node and print '
-                                   'the answer. Exit status 0: a plan; 1: an empty plan or no '
-                                   'answer in time.')
+                                   'the answer. Exit status 0: a plan; 1: no plan (the reason, '
+                                   "from the node's plan_results, on stderr) or no answer in "
+                                   'time.')
     _common(p)
     p.add_argument('--service', default='plan_trajectory',
                    help='service name (default plan_trajectory; e.g. /arm1/plan_trajectory)')
@@ -148,7 +214,9 @@ def add_goal_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan goal``: one goal on the goal topic, as ``ros2 topic pub --once`` would."""
     p = sub.add_parser('goal', help='publish a goal to a running planner node',
                        description='Publish one geometry_msgs/Point on the goal topic, once the '
-                                   'node subscribes, and wait until it has been received.')
+                                   "node subscribes, and wait for its outcome on the node's "
+                                   'plan_results. Exit status 0: planned; 1: not planned (the '
+                                   'reason on stderr) or no answer in time.')
     _common(p)
     p.add_argument('--topic', default='goal', help='goal topic (default goal)')
     p.set_defaults(run=_run_goal)

@@ -9,6 +9,7 @@ block with timeouts and raise ``TimeoutError`` with the reason, so a script neve
 """
 from __future__ import annotations
 
+import os
 import queue
 import threading
 import time
@@ -34,6 +35,23 @@ KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPol
 
 #: Seconds without an answer after which ``RosClient.call_idempotent`` sends its request again.
 RESEND_S = 5.0
+
+
+def discovery_hint() -> str:
+    """Say what to check when no node is found: the node, and the DDS settings both need."""
+    domain = os.environ.get('ROS_DOMAIN_ID') or '0 (unset)'
+    scope = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE') or 'SUBNET (unset)'
+    return (f'is planner_node running, and with the same ROS_DOMAIN_ID (here {domain}) and '
+            f'ROS_AUTOMATIC_DISCOVERY_RANGE (here {scope})? A namespaced node needs the '
+            'namespaced name')
+
+
+def _wait_for_peer(predicate: Any, timeout: float, what: str) -> None:
+    """Wait until ``predicate`` holds; else TimeoutError naming ``what`` and what to check."""
+    try:
+        wait_until(predicate, timeout, what)
+    except TimeoutError:
+        raise TimeoutError(f'no {what} within {timeout:g} s: {discovery_hint()}') from None
 
 
 def plan_request(goal: tuple[float, float, float], tolerance: float = 0.0) -> GetPlan.Request:
@@ -80,7 +98,7 @@ class RosClient:
                                                           qos_profile=KEEP_ALL)
         client = self._clients[name]
         if not client.wait_for_service(timeout_sec=timeout):
-            raise TimeoutError(f'no service {name} within {timeout:g} s')
+            raise TimeoutError(f'no service {name} within {timeout:g} s: {discovery_hint()}')
         return client
 
     def call_async(self, srv_type: Any, name: str, request: Any,
@@ -147,8 +165,8 @@ class RosClient:
         if topic not in self._publishers:
             self._publishers[topic] = self.node.create_publisher(msg_type, topic, depth)
         pub = self._publishers[topic]
-        wait_until(lambda: pub.get_subscription_count() > 0, timeout,
-                   f'a subscriber on {topic}')
+        _wait_for_peer(lambda: pub.get_subscription_count() > 0, timeout,
+                       f'subscriber on {topic}')
         return pub
 
     def publish(self, msg_type: Any, topic: str, msg: Any, timeout: float = TIMEOUT_S) -> None:
@@ -166,5 +184,5 @@ class RosClient:
             sub = self.node.create_subscription(msg_type, topic, box.put, 10)
             self._inboxes[topic] = (sub, box)
         sub, box = self._inboxes[topic]
-        wait_until(lambda: sub.get_publisher_count() > 0, timeout, f'a publisher on {topic}')
+        _wait_for_peer(lambda: sub.get_publisher_count() > 0, timeout, f'publisher on {topic}')
         return box

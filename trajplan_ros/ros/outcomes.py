@@ -1,0 +1,57 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+What became of each goal and call, as diagnostic_msgs/DiagnosticStatus on ``plan_results``.
+
+GetPlan has no field for a reason and a topic goal has no answer, so the node publishes one
+status per goal and per call when it ends: planned, refused, not reached, timed out,
+superseded or unplanned at shutdown. A caller finds its own by what it sent: a call by its
+``goal.header.stamp`` (which the client makes unique), a topic goal by its point. The status's
+``message`` is the reason, as the node logs it.
+
+Fields: ``level`` OK (planned), WARN (superseded, or unplanned at shutdown) or ERROR (every
+other end); ``name`` the node and the job (``/trajplan: service call #3``); ``values``:
+``request`` (``service call`` or ``goal``), ``stamp`` (a call's ``sec.nanosec``, else empty),
+``x``, ``y``, ``z`` (the goal, m, exact decimal round trip), ``status`` (``succeeded``,
+``rejected``, ``not_reached``, ``timed_out``, ``cancelled``, ``refused``, ``superseded``,
+``shut_down`` or ``failed``) and ``motion_time_s`` (empty unless planned).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+
+
+__all__ = ['TOPIC', 'describe_stamp', 'outcome_status', 'outcome_values']
+
+#: The topic the node publishes every outcome on (relative: it follows the node's namespace).
+TOPIC = 'plan_results'
+#: Statuses that are not the caller's goal's fault: WARN, not ERROR.
+_WARNINGS = ('superseded', 'shut_down')
+
+
+def describe_stamp(stamp: tuple[int, int] | None) -> str:
+    """Write a header stamp (sec, nanosec) as ``sec.nanosec``, or '' for none."""
+    return '' if stamp is None else f'{stamp[0]}.{stamp[1]:09d}'
+
+
+def outcome_status(name: str, request: str, stamp: tuple[int, int] | None,
+                   goal: Sequence[float], status: str, message: str,
+                   motion_time_s: float | None = None) -> DiagnosticStatus:
+    """Build the DiagnosticStatus of one goal's or call's end (see the module docstring)."""
+    if status == 'succeeded':
+        level = DiagnosticStatus.OK
+    else:
+        level = DiagnosticStatus.WARN if status in _WARNINGS else DiagnosticStatus.ERROR
+    values = {'request': request, 'stamp': describe_stamp(stamp),
+              **{axis: repr(float(v)) for axis, v in zip('xyz', goal)},
+              'status': status,
+              'motion_time_s': '' if motion_time_s is None else repr(float(motion_time_s))}
+    return DiagnosticStatus(level=level, name=name, message=message, hardware_id='',
+                            values=[KeyValue(key=k, value=v) for k, v in values.items()])
+
+
+def outcome_values(msg: DiagnosticStatus) -> dict[str, str]:
+    """Return an outcome's values as a dict (key -> text)."""
+    return {kv.key: kv.value for kv in msg.values}
