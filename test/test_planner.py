@@ -13,7 +13,7 @@ from trajplan_ros.planning import planner
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
-from trajplan_ros.planning.planner import ALGORITHMS
+from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
 from trajplan_ros.planning.reference import _solutions, radial_angle
 from trajplan_ros.tools.bench.cases import draw_cases
 
@@ -288,3 +288,11 @@ def test_equal_motion_times_go_to_the_least_joint_travel() -> None:
 def test_a_bad_axis_tolerance_raises() -> None:
     with pytest.raises(ValueError, match='axis_tolerance'):
         plan(TARGET, mode='radial', axis_tolerance=0.0)
+
+
+def test_residuals_below_rounding_are_written_as_zero() -> None:
+    assert describe_residual(1.09e-15, 'm') == '0 m'
+    assert describe_residual(2.5e-12, 'rad') == '2.5e-12 rad'
+    assert describe_residual(3.14159e-7, 'm') == '3.14e-07 m'
+    result = plan([0.151171, 0.19162, 0.172124], seed=0)
+    assert result.position_error_m < 1e-12 and result.message.endswith('error 0 m')

@@ -32,7 +32,7 @@ from trajplan_ros.planning.optimize import Interrupt, OptimizeResult
 from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
 
 __all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_AXIS_TOLERANCE',
-           'DEFAULT_TOLERANCE']
+           'DEFAULT_TOLERANCE', 'describe_residual']
 
 #: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
 ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
@@ -212,6 +212,15 @@ def _interrupt(max_planning_time: float | None,
     return interrupt
 
 
+#: Residuals below this (m or rad) are floating-point rounding of the kinematics: written as 0.
+ROUNDING_FLOOR = 1e-12
+
+
+def describe_residual(value: float, unit: str) -> str:
+    """Write a reached goal's error (``unit`` m or rad): 3 digits, or 0 below ROUNDING_FLOOR."""
+    return f'0 {unit}' if abs(value) < ROUNDING_FLOOR else f'{value:.3g} {unit}'
+
+
 def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
             axis_err: float) -> tuple[PlanStatus, str]:
     """Return the status of a search and its one-line reason (axis_err NaN in free mode)."""
@@ -221,7 +230,8 @@ def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
                                       f'{pos_err:.3g} m')
     if found.interrupted == PlanStatus.CANCELLED:
         return PlanStatus.CANCELLED, 'planning stopped before the end'
-    axis = '' if np.isnan(axis_err) else f', axis {axis_err:.3g} rad from the goal ray'
+    axis = ('' if np.isnan(axis_err) else
+            f", axis {describe_residual(axis_err, 'rad')} from the goal ray")
     if pos_err > limits.tolerance:
         return PlanStatus.NOT_REACHED, (f'goal not reached: best position error {pos_err:.3g} m '
                                         f'is above the tolerance {limits.tolerance:.3g} m{axis}')
@@ -230,7 +240,8 @@ def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
             f'no radial pose found: the best tool axis is {axis_err:.3g} rad from the goal ray '
             f'(axis_tolerance {limits.axis_tolerance:.3g} rad), position error {pos_err:.3g} m')
     return (PlanStatus.SUCCEEDED,
-            f'reached in {found.motion_time:.4f} s of motion, error {pos_err:.3g} m{axis}')
+            f"reached in {found.motion_time:.4f} s of motion, error "
+            f"{describe_residual(pos_err, 'm')}{axis}")
 
 
 def _outcome(obj: Objective, found: OptimizeResult, limits: _Limits, clock: float,

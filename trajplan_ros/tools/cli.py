@@ -15,7 +15,8 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus)
+                                           DEFAULT_TOLERANCE, describe_residual, plan,
+                                           PlanResult, PlanStatus)
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, finite_number,
                                           UsageError)
@@ -134,7 +135,8 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
         lines.append('joint goal [rad]: ' + '  '.join(
             f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
         lines.append(f'motion time {result.motion_time_s:.4f} s, position error '
-                     f'{result.position_error_m:.3g} m, efficiency F {result.efficiency:.4f}, '
+                     f"{describe_residual(result.position_error_m, 'm')}, efficiency F "
+                     f'{result.efficiency:.4f}, '
                      f'{result.iterations} iterations, '
                      f'planned in {1e3 * result.plan_time_s:.1f} ms')
     return '\n'.join(lines)

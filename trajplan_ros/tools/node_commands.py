@@ -22,6 +22,7 @@ import sys
 import time
 from typing import Any, Callable
 
+from trajplan_ros.planning.planner import describe_residual
 from trajplan_ros.tools.arguments import finite_number, UsageError
 
 
@@ -47,7 +48,7 @@ def print_path(path: Any, goal: Goal) -> None:
     print(f"tool path: {len(path.poses)} poses in frame '{path.header.frame_id}'; last pose "
           f'position ({p.x:.6f}, {p.y:.6f}, {p.z:.6f}) m, orientation (x, y, z, w) '
           f'({o.x:.4f}, {o.y:.4f}, {o.z:.4f}, {o.w:.4f})')
-    print(f'position error: {math.dist((p.x, p.y, p.z), goal):.3g} m')
+    print(f"position error: {describe_residual(math.dist((p.x, p.y, p.z), goal), 'm')}")
 
 
 def print_trajectory(trajectory: Any, topic: str) -> None:
