@@ -240,7 +240,7 @@ def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
             f'no radial pose found: the best tool axis is {axis_err:.3g} rad from the goal ray '
             f'(axis_tolerance {limits.axis_tolerance:.3g} rad), position error {pos_err:.3g} m')
     return (PlanStatus.SUCCEEDED,
-            f"reached in {found.motion_time:.4f} s of motion, error "
+            f'reached in {found.motion_time:.4f} s of motion, error '
             f"{describe_residual(pos_err, 'm')}{axis}")
 
 
