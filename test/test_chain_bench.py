@@ -83,7 +83,8 @@ def test_bench_on_a_urdf_prints_every_row(tmp_path, capsys) -> None:
 ])
 def test_bench_on_a_urdf_refuses_options_of_the_paper_bench(argv, reason, capsys) -> None:
     so101 = PUBLISHED['so101']
-    assert main(['bench', '--urdf', str(so101.urdf), *argv, '--quiet']) == 2
+    assert main(['bench', '--urdf', str(so101.urdf), '--tip-link', so101.tip_link, *argv,
+                 '--quiet']) == 2
     assert reason in capsys.readouterr().err
 
 
