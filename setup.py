@@ -18,8 +18,9 @@ setup(
         ('share/' + package_name + '/config', glob('config/*.yaml')),
     ],
     python_requires='>=3.10',
-    # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities
-    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml'],
+    # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities;
+    # numba compiles the planning kernels (0.60: the first release for NumPy 2)
+    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.60'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
         'ros': ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp'],

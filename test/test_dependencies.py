@@ -37,7 +37,7 @@ ROSDEP_YAML = Path(__file__).with_name('rosdep_keys.yaml')
 #: requirement in setup.py, the key in package.xml and its entry in rosdep_keys.yaml.
 DISTRIBUTION_KEYS = {
     'defusedxml': 'python3-defusedxml',
-    'numba': 'python3-numba',                   # not used yet: a later change adds numba>=0.60
+    'numba': 'python3-numba',
     'numpy': 'python3-numpy',
     'pytest': 'python3-pytest',
     'pyyaml': 'python3-yaml',

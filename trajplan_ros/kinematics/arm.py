@@ -19,6 +19,7 @@ from typing import Sequence
 import numpy as np
 
 from trajplan_ros.kinematics.errors import InvalidArmModel
+from trajplan_ros.kinematics.forward import ABOUT_X, GENERAL, IDENTITY, walk_chain
 from trajplan_ros.kinematics.urdf_import import read_chain
 
 __all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
@@ -150,17 +151,14 @@ def _rotations(name: str, values: Sequence, n: int) -> np.ndarray:
 #: joint's axis by 5e-12 rad.
 _IDLE = 1e-9
 
-#: How the walk applies a link rotation: skip it, the 2x2 rotation of y and z (a rotation about
-#: x, as in every DH link), or the full 3x3 product.
-_IDENTITY, _ABOUT_X, _GENERAL = 0, 1, 2
-
 
 def _kind(rotation: np.ndarray) -> int:
+    """Return how the walk applies a link rotation (``forward``: none, about x, general)."""
     if np.array_equal(rotation, np.eye(3)):
-        return _IDENTITY
+        return IDENTITY
     if rotation[0, 0] == 1.0 and not rotation[0, 1:].any() and not rotation[1:, 0].any():
-        return _ABOUT_X
-    return _GENERAL
+        return ABOUT_X
+    return GENERAL
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,7 +201,7 @@ class ArmModel:
     planned: int
     base_link: str
     tip_link: str
-    _kinds: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    _kinds: np.ndarray = field(init=False, repr=False, compare=False)
     _tail: np.ndarray = field(init=False, repr=False, compare=False)
     _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
@@ -260,7 +258,7 @@ class ArmModel:
         put(self, 'planned', planned)
         put(self, 'base_link', str(base_link))
         put(self, 'tip_link', str(tip_link))
-        put(self, '_kinds', tuple(_kind(r) for r in self.rotations))
+        put(self, '_kinds', np.array([_kind(r) for r in self.rotations], dtype=np.int64))
         put(self, '_tail', np.stack((self.tool_point, self.tool_axis)))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
         if not self.reach < 1e6:
@@ -343,7 +341,7 @@ class ArmModel:
         """Return (a, alpha, d) when the chain is a standard DH chain (``from_dh``), else None."""
         plain = (not self._moved_base and not self.tool_point.any()
                  and np.array_equal(self.tool_axis, (0.0, 0.0, 1.0)))
-        if not plain or any(k == _GENERAL for k in self._kinds) or self.translations[:, 1].any():
+        if not plain or np.any(self._kinds == GENERAL) or self.translations[:, 1].any():
             return None
         r = self.rotations
         return self.translations[:, 0], np.arctan2(r[:, 2, 1], r[:, 1, 1]), self.translations[:, 2]
@@ -456,39 +454,14 @@ class ArmModel:
         """
         Walk joints top-1 .. bottom from frame ``top`` towards the base (B is left to _walk).
 
-        This is every optimiser's hot path.
-
-        ``tail`` (2, 3) is the tool point and axis in frame ``top``. Returns vectors
-        (rows, N, 3): row 0 is the tool point, row 1 the tool axis and, with ``jacobian``, rows
-        2 + 3i, 3 + 3i and 4 + 3i are d(point)/dq_i, d(axis)/dq_i and sign_i times the axis of
-        joint i, for each planned joint i. Per joint it applies v <- Rz(theta) (rotation v +
-        translation) to every row at once (the translation only to the point): the rotation
-        about z as one complex product on a complex view of the x, y coordinates, a DH link's
-        rotation about x likewise on y, z, any other as one matrix product, so the cost is a few
-        array operations per joint whatever N is. The rows for joint i are born in its own
-        frame as z x v (i v in complex form) and z, then rotated with everything else.
+        ``forward.walk_chain`` (compiled): ``tail`` (2, 3) is the tool point and axis in frame
+        ``top``; returns rows (rows, N, 3) of the tool point, the tool axis and, with
+        ``jacobian``, per planned joint i its derivatives and signed axis (rows 2 + 3i .. 4 + 3i).
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
-        theta = (q[:, bottom:top] * self.sign[bottom:top] + self.offset[bottom:top]).T
-        rot = np.empty(theta.shape, dtype=complex)    # e^(i theta): cos, sin beat complex exp
-        np.cos(theta, out=rot.real)
-        np.sin(theta, out=rot.imag)
-        rows = 2 + 3 * self.planned if jacobian else 2
-        vec = np.zeros((rows, q.shape[0], 3))
-        vec[:2] = tail[:, None, :]
-        for i in range(top - 1, bottom - 1, -1):
-            kind, r = self._kinds[i], self.rotations[i]
-            if kind == _ABOUT_X:                                        # y + i z, a view
-                vec[..., 1:].view(complex)[..., 0] *= complex(r[1, 1], r[2, 1])
-            elif kind == _GENERAL:
-                vec = _rotated(r, vec)
-            vec[0] += self.translations[i]
-            xy = vec[..., :2].view(complex)[..., 0]                  # x + i y, a view
-            xy *= rot[i - bottom]
-            if jacobian and i < self.planned:
-                xy[2 + 3 * i: 4 + 3 * i] = (1j * self.sign[i]) * xy[:2]
-                vec[4 + 3 * i, :, 2] = self.sign[i]
-        return vec
+        return walk_chain(np.ascontiguousarray(q), self.sign, self.offset, self.rotations,
+                          self.translations, self._kinds, top, bottom, tail, self.planned,
+                          jacobian)
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """

@@ -4,12 +4,13 @@
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus)
+                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus,
+                                           prepare)
 from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory, trajectory_points
 
 __all__ = [
     'ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'Mode',
     'Objective', 'PlanResult',
-    'PlanStatus', 'RewardPunishment', 'Trajectory', 'plan', 'servo_trajectory',
+    'PlanStatus', 'RewardPunishment', 'Trajectory', 'plan', 'prepare', 'servo_trajectory',
     'trajectory_points',
 ]

@@ -72,6 +72,7 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros.planning import prepare
 from trajplan_ros.ros import job as jobs
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
@@ -139,6 +140,9 @@ class PlannerNode(Node):
             self.declare_parameter(spec.name, spec.default, _descriptor(spec))
         self._topic_description = ''                  # the last usable robot_description
         self._settings = Settings.from_parameters(self._parameter_values())
+        kernels = prepare()                     # before the service is offered: no plan waits
+        log = self.get_logger().info if kernels.compiled else self.get_logger().debug
+        log(kernels.describe())
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 

@@ -16,7 +16,7 @@ from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
-                                           PlanResult, PlanStatus)
+                                           PlanResult, PlanStatus, prepare)
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, finite_number,
                                           UsageError)
@@ -180,6 +180,9 @@ def _run_plan(args: argparse.Namespace) -> int:
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
                 'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity}
+    kernels = prepare()
+    if kernels.compiled:                                   # the first run after an install
+        print(f'trajplan: {kernels.describe()}', file=sys.stderr)
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '

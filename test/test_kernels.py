@@ -1,0 +1,116 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The compiled kernels' policy: no GIL, a disk cache that can never run stale, and a fallback.
+
+What each kernel computes is tested with its concept (test_arm.py: the chain walk against
+homogeneous transforms and its Jacobian against finite differences; test_urdf_import.py and
+test_chain_bench.py: URDF arms against yourdfpy's FK).
+"""
+from __future__ import annotations
+
+import ast
+import builtins
+import os
+from pathlib import Path
+import re
+import subprocess
+import sys
+
+import pytest
+from trajplan_ros.kinematics import forward
+from trajplan_ros.kinematics.jit import kernels
+from trajplan_ros.planning import prepare
+
+PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
+#: Names a kernel may read besides its own module's: numpy and the builtins.
+ALLOWED = {'np', *dir(builtins)}
+
+
+def kernel_modules() -> dict[Path, ast.Module]:
+    """Return every module of the package that defines a ``@kernel``, parsed."""
+    found = {}
+    for path in sorted(PACKAGE.rglob('*.py')):
+        tree = ast.parse(path.read_text(encoding='utf-8'))
+        if any(isinstance(d, ast.Name) and d.id == 'kernel'
+               for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+               for d in node.decorator_list):
+            found[path] = tree
+    return found
+
+
+def own_names(tree: ast.Module) -> set[str]:
+    """Return the names a module defines itself: functions, classes and assignments."""
+    names = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+    return names
+
+
+def test_every_kernel_module_is_found() -> None:
+    assert Path(forward.__file__).resolve() in kernel_modules()
+    assert len(kernels()) >= 1
+
+
+@pytest.mark.parametrize('path', sorted(kernel_modules()), ids=lambda p: p.name)
+def test_kernels_read_only_their_own_modules_names(path: Path) -> None:
+    # numba drops a cached kernel when its own file changes, not when a kernel or a constant
+    # it takes from another file does: so a kernel reads nothing from another file
+    tree = kernel_modules()[path]
+    own = own_names(tree)
+    for node in tree.body:
+        if not isinstance(node, ast.FunctionDef) or not any(
+                isinstance(d, ast.Name) and d.id == 'kernel' for d in node.decorator_list):
+            continue
+        body = [n for stmt in node.body for n in ast.walk(stmt) if isinstance(n, ast.Name)]
+        local = {a.arg for a in node.args.args} | {
+            n.id for n in body if isinstance(n.ctx, ast.Store)}
+        read = {n.id for n in body if isinstance(n.ctx, ast.Load)}
+        foreign = read - local - own - ALLOWED
+        assert not foreign, f'{path.name}: kernel {node.name} reads {sorted(foreign)}'
+
+
+def test_every_kernel_releases_the_gil_and_caches() -> None:
+    prepare()
+    for k in kernels():
+        assert k.targetoptions.get('nogil') is True, k
+        assert k.targetoptions.get('fastmath') in (None, False), k
+        assert k.stats.cache_path, k
+
+
+def run_plan(env: dict[str, str]) -> subprocess.CompletedProcess:
+    """Run ``trajplan plan`` on the paper's target in a new process with ``env``."""
+    return subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'plan', '0.151171',
+                           '0.19162', '0.172124'], capture_output=True, text=True, timeout=300,
+                          env=env, cwd=Path(__file__).resolve().parents[1])
+
+
+def test_the_first_run_compiles_and_says_so_later_ones_load(tmp_path) -> None:
+    env = {**os.environ, 'NUMBA_CACHE_DIR': str(tmp_path / 'cache')}
+    first = run_plan(env)
+    assert first.returncode == 0, first.stderr
+    assert 'trajplan: compiled ' in first.stderr and 'planning kernels in' in first.stderr
+    again = run_plan(env)
+    assert again.returncode == 0, again.stderr
+    assert again.stderr == ''
+
+    def plan_only(out: str) -> str:
+        return re.sub(r'planned in \S+ ms', '', out)
+
+    assert plan_only(again.stdout) == plan_only(first.stdout)
+
+
+def test_without_a_writable_cache_it_compiles_and_warns_once() -> None:
+    # numba's only locator is then the user's folder, and that cannot be made: as with a
+    # read-only package folder and a read-only HOME (a container run as another user)
+    env = {**os.environ, 'NUMBA_CACHE_LOCATOR_CLASSES': 'UserProvidedCacheLocator',
+           'NUMBA_CACHE_DIR': '/dev/null/cache'}
+    done = run_plan(env)
+    assert done.returncode == 0, done.stderr
+    assert 'succeeded: reached in 4.5143 s' in done.stdout
+    assert done.stderr.count('set NUMBA_CACHE_DIR to a writable folder') == 1, done.stderr

@@ -1,0 +1,80 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The compiled forward kinematics and Jacobian of a serial chain (eq. 1-2), every optimiser's path.
+
+``walk_chain`` walks the joints from the tip towards the base for each configuration: per joint
+i it applies v <- Rz(theta_i) (L_i rotation v + L_i translation) to the tool point and only
+the rotation to the tool axis, with theta_i = sign_i q_i + offset_i. With the Jacobian, the
+columns of joint i are born in its own frame, after its turn, as z x (tool point), z x (tool
+axis) and z itself, each times sign_i, and are then turned with everything else. A link
+rotation is applied by its kind: none, about x only (every DH link: alpha_i), or in general.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from trajplan_ros.kinematics.jit import kernel
+
+__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'walk_chain']
+
+#: How a link rotation is applied: skipped, as a rotation about x, or as a 3x3 product.
+IDENTITY, ABOUT_X, GENERAL = 0, 1, 2
+
+
+@kernel
+def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: np.ndarray,
+               translations: np.ndarray, kinds: np.ndarray, top: int, bottom: int,
+               tail: np.ndarray, planned: int, jacobian: bool) -> np.ndarray:
+    """
+    Walk joints top-1 .. bottom from frame ``top`` to frame ``bottom`` (eq. 1-2).
+
+    q (N, >= top) holds the joint angles, columns bottom..top-1 used; ``tail`` (2, 3) is the
+    tool point and axis in frame ``top``. Returns (rows, N, 3): row 0 the tool point, row 1 the
+    tool axis and, with ``jacobian``, rows 2 + 3i, 3 + 3i and 4 + 3i the derivatives of point
+    and axis by q_i and sign_i times joint i's axis, for each joint i < ``planned``.
+    """
+    n = q.shape[0]
+    rows = 2 + 3 * planned if jacobian else 2
+    out = np.zeros((rows, n, 3))
+    v = np.empty((rows, 3))
+    for k in range(n):
+        v[:] = 0.0
+        v[0, :] = tail[0]
+        v[1, :] = tail[1]
+        live = 2                                  # rows born so far: point, axis, then columns
+        for i in range(top - 1, bottom - 1, -1):
+            r = rotations[i]
+            if kinds[i] == ABOUT_X:               # y, z turned by alpha_i: (cos, sin) = r[1:, 1]
+                c, s = r[1, 1], r[2, 1]
+                for m in range(live):
+                    y, z = v[m, 1], v[m, 2]
+                    v[m, 1] = y * c - z * s
+                    v[m, 2] = y * s + z * c
+            elif kinds[i] == GENERAL:
+                for m in range(live):
+                    x, y, z = v[m, 0], v[m, 1], v[m, 2]
+                    v[m, 0] = r[0, 0] * x + r[0, 1] * y + r[0, 2] * z
+                    v[m, 1] = r[1, 0] * x + r[1, 1] * y + r[1, 2] * z
+                    v[m, 2] = r[2, 0] * x + r[2, 1] * y + r[2, 2] * z
+            v[0, 0] += translations[i, 0]
+            v[0, 1] += translations[i, 1]
+            v[0, 2] += translations[i, 2]
+            theta = q[k, i] * sign[i] + offset[i]
+            c, s = np.cos(theta), np.sin(theta)
+            for m in range(live):                 # Rz(theta_i)
+                x, y = v[m, 0], v[m, 1]
+                v[m, 0] = x * c - y * s
+                v[m, 1] = x * s + y * c
+            if jacobian and i < planned:          # z x p, z x u and z, times sign_i
+                col = 2 + 3 * i
+                for m in range(2):
+                    v[col + m, 0] = -sign[i] * v[m, 1]
+                    v[col + m, 1] = sign[i] * v[m, 0]
+                    v[col + m, 2] = 0.0
+                v[col + 2, 0] = 0.0
+                v[col + 2, 1] = 0.0
+                v[col + 2, 2] = sign[i]
+                live = rows
+        out[:, k, :] = v
+    return out
