@@ -17,10 +17,13 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+from trajplan_ros import ArmModel, plan
 from trajplan_ros.kinematics import forward
 from trajplan_ros.kinematics.jit import kernels
 from trajplan_ros.planning import prepare
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
 #: Names a kernel may read besides its own module's: numpy and the builtins.
@@ -81,6 +84,20 @@ def test_every_kernel_releases_the_gil_and_caches() -> None:
         assert k.targetoptions.get('nogil') is True, k
         assert k.targetoptions.get('fastmath') in (None, False), k
         assert k.stats.cache_path, k
+
+
+def test_prepare_compiles_what_every_arm_needs() -> None:
+    # a kernel compiled during a plan would cost that plan seconds (and the node's plans end
+    # at max_planning_time): URDF arms and other modes must find every kernel ready
+    prepare()
+    before = {k: len(k.overloads) for k in kernels()}
+    for name in ('so101', 'panda'):
+        published = PUBLISHED[name]
+        arm = ArmModel.from_urdf(published.urdf, published.base_link, published.tip_link)
+        goal = arm.tool(np.zeros((1, arm.n_joints)))[0][0] * 0.9
+        for mode in ('free', 'radial'):
+            plan(goal, arm=arm, mode=mode, seed=0, max_planning_time=0.5)
+    assert {k: len(k.overloads) for k in kernels()} == before
 
 
 def run_plan(env: dict[str, str]) -> subprocess.CompletedProcess:

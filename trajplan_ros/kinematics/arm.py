@@ -26,7 +26,7 @@ __all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
 
 
 def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
-    arr = np.asarray(values, dtype=float)
+    arr = np.ascontiguousarray(values, dtype=float)        # one layout: one compiled walk
     if arr.shape != (n,):
         raise InvalidArmModel(f'{name} needs {n} values, got shape {arr.shape}')
     if not np.all(np.isfinite(arr)):
@@ -135,7 +135,7 @@ def _names(joint_names: Sequence[str] | None, n: int) -> tuple[str, ...]:
 
 
 def _rotations(name: str, values: Sequence, n: int) -> np.ndarray:
-    arr = np.asarray(values, dtype=float)
+    arr = np.ascontiguousarray(values, dtype=float)
     if arr.shape != (n, 3, 3) or not np.all(np.isfinite(arr)):
         raise InvalidArmModel(f'{name} needs {n} finite 3x3 rotation matrices')
     if not np.allclose(arr @ np.swapaxes(arr, -1, -2), np.eye(3), atol=1e-9) or not np.allclose(
@@ -219,7 +219,7 @@ class ArmModel:
             raise InvalidArmModel('the arm has no joints')
         put = object.__setattr__
         put(self, 'rotations', _rotations('rotations', rotations, n))
-        put(self, 'translations', np.asarray(translations, dtype=float))
+        put(self, 'translations', np.ascontiguousarray(translations, dtype=float))
         if self.translations.shape != (n, 3) or not np.all(np.isfinite(self.translations)):
             raise InvalidArmModel(f'translations needs {n} finite (x, y, z) vectors')
         base = np.eye(4) if base is None else np.asarray(base, dtype=float)
@@ -459,9 +459,9 @@ class ArmModel:
         ``jacobian``, per planned joint i its derivatives and signed axis (rows 2 + 3i .. 4 + 3i).
         q: (N, top) joint angles; columns bottom..top-1 are used.
         """
-        return walk_chain(np.ascontiguousarray(q), self.sign, self.offset, self.rotations,
-                          self.translations, self._kinds, top, bottom, tail, self.planned,
-                          jacobian)
+        return walk_chain(np.ascontiguousarray(q, dtype=float), self.sign, self.offset,
+                          self.rotations, self.translations, self._kinds, top, bottom,
+                          np.ascontiguousarray(tail, dtype=float), self.planned, jacobian)
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """
