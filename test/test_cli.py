@@ -2,13 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """The trajplan command: one goal, a goals file, bad input."""
 import json
+import re
 import subprocess
 import sys
 
 import pytest
 from trajplan_ros.planning import planner
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
-from trajplan_ros.tools.cli import main
+from trajplan_ros.tools.cli import build_parser, main
 
 
 TARGET = ['0.151171', '0.19162', '0.172124']
@@ -141,8 +142,14 @@ def test_bad_arm_arguments_exit_2_with_one_line(argv, reason, capsys):
     assert reason in err and err.count('\n') == 1
 
 
-@pytest.mark.parametrize('command', [None, 'plan', 'call', 'goal', 'bench', 'figures', 'urdf',
-                                     'demo'])
+def subcommands() -> list[str]:
+    """Return the names of ``trajplan``'s subcommands, from its parser."""
+    parser = build_parser()
+    return [name for action in parser._subparsers._group_actions
+            for name in action.choices]
+
+
+@pytest.mark.parametrize('command', [None, *subcommands()])
 def test_every_help_works(command, capsys):
     with pytest.raises(SystemExit) as exited:
         main([command, '--help'] if command else ['--help'])
@@ -175,3 +182,9 @@ def test_trajectory_is_the_message_as_published(capsys):
     assert json.loads(capsys.readouterr().out)['trajectory'] is None
     assert main(['plan', *TARGET, '--trajectory']) == 2
     assert '--trajectory needs --json' in capsys.readouterr().err
+    # a trajectory past the bound is not built: the plan stands, the message says why
+    assert main(['plan', *TARGET, '--json', '--trajectory', '--sample-period', '1e-6']) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record['success'] and record['trajectory'] is None
+    assert re.search(r'; no trajectory: it would need \d{7} points, more than '
+                     r'--max-trajectory-points 10000$', record['message'])

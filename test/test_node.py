@@ -9,6 +9,7 @@ and joint_states topics, the published trajectory and the node's log lines.
 from __future__ import annotations
 
 import os
+import queue
 import re
 import signal
 import subprocess
@@ -17,6 +18,7 @@ import time
 from typing import Iterator
 
 from conftest import Install, LIVENESS_S, NodeProcess, wait_until
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
 import numpy as np
@@ -25,6 +27,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import paper_arm, plan
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros.ros import outcomes
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 
@@ -274,6 +277,60 @@ def test_trajplan_goal_publishes_a_goal_the_node_plans(planner) -> None:
                      done.stderr, re.M), done.stderr
 
 
+def outcomes_of(box, names: set[str], timeout: float = LIVENESS_S) -> dict[str, list]:
+    """Collect the outcomes in ``box`` until every job in ``names`` has one; by job name."""
+    found: dict[str, list] = {}
+    deadline = time.monotonic() + timeout
+    while not names <= set(found) and time.monotonic() < deadline:
+        try:
+            msg = box.get(timeout=0.1)
+        except queue.Empty:
+            continue
+        found.setdefault(msg.name.split(': ', 1)[1], []).append(
+            (msg.level, msg.message, outcomes.outcome_values(msg)))
+    assert names <= set(found), (sorted(names - set(found)), found)
+    return found
+
+
+def test_every_goal_and_call_has_one_outcome_with_its_reason(start_node, peer) -> None:
+    node = start_node('-r', '__ns:=/outcomes', '--log-level', 'outcomes.trajplan:=debug')
+    box = peer.inbox(DiagnosticStatus, '/outcomes/plan_results', qos=outcomes.QOS)
+    # refused before planning, told apart by their stamps
+    wrong_frame = plan_request((0.2, 0.1, 0.15))
+    wrong_frame.goal.header.frame_id = 'world'
+    wrong_frame.goal.header.stamp.sec, wrong_frame.goal.header.stamp.nanosec = 7, 11
+    negative = plan_request((0.2, 0.1, 0.15), tolerance=-1.0)
+    negative.goal.header.stamp.sec = 8
+    for request in (wrong_frame, negative):
+        assert not peer.call(GetPlan, '/outcomes/plan_trajectory', request).plan.poses
+    # a goal that keeps the node busy (until max_planning_time), then three: two superseded
+    goals = peer.publisher(Point, '/outcomes/goal')
+    goals.publish(Point(x=HOPELESS_GOAL[0], y=HOPELESS_GOAL[1], z=HOPELESS_GOAL[2]))
+    node.wait_for(r'planning goal #1 ')
+    for x in (0.11, 0.12, 0.13):
+        goals.publish(Point(x=x, y=0.05, z=0.2))
+    node.wait_for(r'goal #4 \(0.13, 0.05, 0.2\) m from .*: reached')
+    names = {'service call #1', 'service call #2', 'goal #1', 'goal #2', 'goal #3', 'goal #4'}
+    found = outcomes_of(box, names)
+    assert node.stop() == 0, node.output
+    assert set(found) == names and all(len(found[n]) == 1 for n in names), found
+    by_stamp = {v['stamp']: (level, message, v) for name in names if name.startswith('service')
+                for level, message, v in found[name]}
+    level, message, values = by_stamp['7.000000011']
+    assert (level, values['status']) == (DiagnosticStatus.ERROR, 'refused')
+    assert values['request'] == 'service call'
+    assert "in frame 'world'" in message
+    assert (values['x'], values['y'], values['z']) == ('0.2', '0.1', '0.15')
+    assert by_stamp['8.000000000'][2]['status'] == 'refused'
+    assert 'tolerance -1.0 m is not allowed' in by_stamp['8.000000000'][1]
+    assert found['goal #1'][0][2]['status'] in ('not_reached', 'timed_out')
+    ends = [found[f'goal #{n}'][0] for n in (2, 3, 4)]
+    assert [v['status'] for _, _, v in ends] == ['superseded', 'superseded', 'succeeded']
+    assert [level for level, _, _ in ends] == [DiagnosticStatus.WARN, DiagnosticStatus.WARN,
+                                               DiagnosticStatus.OK]
+    assert float(ends[2][2]['motion_time_s']) > 0 and ends[2][2]['stamp'] == ''
+
+
 def test_trajplan_call_without_a_node_times_out_with_the_reason() -> None:
     done = trajplan('call', '0.1', '0.1', '0.1', '--service', '/nobody/plan_trajectory',
                     '--timeout', '1')
@@ -302,6 +359,9 @@ def test_signal_mid_plan_ends_the_node_cleanly_and_answers_the_call(start_node, 
     node = start_node('-r', '__ns:=/sig', '-p', 'algorithm:=pso', '-p', 'population:=5000',
                       '-p', 'max_iterations:=1000000', '-p', 'max_planning_time:=60.0',
                       '--log-level', 'sig.trajplan:=debug')
+    results = peer.inbox(DiagnosticStatus, '/sig/plan_results', qos=outcomes.QOS)
+    while not results.empty():                          # the other signal's run
+        results.get_nowait()
     pending = peer.call_async(GetPlan, '/sig/plan_trajectory', plan_request(HOPELESS_GOAL))
     node.wait_for(r'planning service call #1 ')        # the worker plans this call
     peer.publisher(Point, '/sig/goal').publish(Point(x=0.1, y=0.1, z=0.2))    # queued behind it
@@ -317,4 +377,7 @@ def test_signal_mid_plan_ends_the_node_cleanly_and_answers_the_call(start_node, 
     assert node.has(r'service call #1 .* m: unplanned: shutting down')  # stopped mid-plan
     assert node.has(r'goal #1 .* m: unplanned: shutting down')          # the queued goal
     assert not node.has(r'published ')
+    found = outcomes_of(results, {'service call #1', 'goal #1'})
+    assert {name: [v['status'] for _, _, v in found[name]] for name in found} == {
+        'service call #1': ['shut_down'], 'goal #1': ['shut_down']}
     print(f'{sig.name}: exited {elapsed:.3f} s after the signal')

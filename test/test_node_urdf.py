@@ -115,7 +115,7 @@ def test_clicked_points_in_the_base_frame_are_goals(planner, describe, peer,
     elsewhere.header.frame_id = 'world'
     elsewhere.point.x, elsewhere.point.y, elsewhere.point.z = goal
     peer.publish(PointStamped, f'{NS}/clicked_point', elsewhere)
-    planner.wait_for(rf"clicked_point {fmt(goal)} m: refused: it is in frame 'world', but "
+    planner.wait_for(rf"clicked_point #\d+ {fmt(goal)} m: refused: it is in frame 'world', but "
                      r"this node plans in base_frame 'base_link'", mark)
     clicked = PointStamped()
     clicked.header.frame_id = 'base_link'

@@ -141,3 +141,15 @@ def test_counting_checks_its_arguments_like_the_trajectory():
                  (START, GOAL, OMEGA, 0.0), (START, GOAL, np.nan, 0.1)):
         with pytest.raises(ValueError):
             trajectory_points(*args)
+
+
+def test_short_segments_are_never_faster_than_omega_but_for_rounding():
+    # an arrival a microsecond and a bit before a grid point makes a segment that short: the
+    # positions' own rounding (an ulp of ~3 rad) is then the only excess over omega * dt
+    start = np.array([2.942, 0.0])
+    goal = start + OMEGA * np.array([3.0 - 1.05e-6, 3.2])
+    traj = servo_trajectory(start, goal, OMEGA, sample_period=0.1)
+    dt = np.diff(traj.times, prepend=0.0)[:, None]
+    step = np.abs(np.diff(np.vstack((start, traj.positions)), axis=0))
+    assert dt.min() < 2e-6                                        # the short segment is there
+    assert np.all(step <= OMEGA * dt + 4 * np.spacing(np.abs(traj.positions)))

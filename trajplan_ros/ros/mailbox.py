@@ -43,6 +43,7 @@ class Job:
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan
     settled: bool = False            # logged and counted
+    reported: bool = False           # its outcome published on plan_results
     taken: threading.Event = field(default_factory=threading.Event)   # the answer is taken
 
     @property

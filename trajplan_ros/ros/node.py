@@ -16,7 +16,8 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   and why, with what the caller sent (``ros.outcomes``).
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
 * ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal,
-  refused with a logged reason unless its frame is ``base_frame`` (or empty).
+  refused with its reason (logged and on ``plan_results``) unless its frame is ``base_frame``
+  (or empty).
 * ``robot_description`` (std_msgs/msg/String, in; reliable, transient local, depth 1, as
   robot_state_publisher offers it): a URDF; unless the ``robot_description`` parameter is set,
   the arm is built from it for the next plan. A refused description is logged and the arm in
@@ -34,11 +35,15 @@ Concurrency, all of it:
 * The main thread waits for SIGINT or SIGTERM (rclpy's own signal handling is off), then
   ``shut_down`` stops intake, stops the running plan, answers every waiting call with an empty
   plan, and only then the context is shut down.
+* Each job's outcome goes to ``plan_results`` from whichever of the three threads ends it (a
+  refusal or a superseded goal on the executor, a plan on the worker, shutdown on the main
+  thread); ``Job.reported``, set under the answer lock, lets only the first through.
 
 QoS: the service and the goal subscription keep all samples (reliable, KEEP_ALL), so no
 request or goal that reached the node's reader is overwritten before a callback sees it; the
 queue of calls is bounded by ``max_queued_calls`` instead. joint_states are taken best effort
-(matches publishers of either reliability; only the newest state matters).
+(matches publishers of either reliability; only the newest state matters). ``plan_results``
+keeps its last 100 outcomes for subscribers that match late (transient local).
 """
 from __future__ import annotations
 
@@ -73,12 +78,11 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.planning import prepare
-from trajplan_ros.ros import job as jobs
+from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
-from trajplan_ros.ros.outcomes import outcome_status, TOPIC as RESULTS_TOPIC
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
 
 
@@ -89,8 +93,6 @@ KEEP_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPol
 #: robot_state_publisher's robot_description: the latest description, also to late joiners.
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-#: Outcomes on plan_results: reliable, the last 100 kept for a subscriber slow to take them.
-RESULTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 #: After handing over a call's answer, how long the worker may wait (for nothing but the answer
 #: to go out) before it publishes the trajectory and logs, unless new work arrives first.
 ANSWER_GRACE_S = 5e-3
@@ -163,7 +165,7 @@ class PlannerNode(Node):
         self._trajectories = self.create_publisher(JointTrajectory, 'joint_trajectory', 10)
         self._paths = self.create_publisher(Path, 'planned_path', 10)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._results = self.create_publisher(DiagnosticStatus, RESULTS_TOPIC, RESULTS)
+        self._results = self.create_publisher(DiagnosticStatus, outcomes.TOPIC, outcomes.QOS)
         self.create_subscription(Point, 'goal', self._on_goal, KEEP_ALL)
         self.create_subscription(PointStamped, 'clicked_point', self._on_clicked_point, KEEP_ALL)
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
@@ -260,7 +262,8 @@ class PlannerNode(Node):
         if frame and frame != base_frame:
             self._counters.add('goals_received')
             self._counters.add('goals_failed')
-            job = Job('clicked_point', (msg.point.x, msg.point.y, msg.point.z))
+            job = Job(f'clicked_point #{next(self._goal_ids)}',
+                      (msg.point.x, msg.point.y, msg.point.z))
             self._refused(job, f"it is in frame '{frame}', but this node plans in base_frame "
                                f"'{base_frame}' (it does no frame transforms)")
             return
@@ -303,8 +306,12 @@ class PlannerNode(Node):
 
     def _publish_outcome(self, job: Job, status: str, reason: str,
                          motion_time_s: float | None = None) -> None:
-        """Tell ``plan_results`` how ``job`` ended (from either thread; once per job)."""
-        self._results.publish(outcome_status(
+        """Tell ``plan_results`` how ``job`` ended: from any thread, the first time only."""
+        with self._answer_lock:
+            if job.reported:
+                return
+            job.reported = True
+        self._results.publish(outcomes.outcome_status(
             f'{self.get_fully_qualified_name()}: {job.label}',
             'service call' if job.is_call else 'goal', job.stamp, job.goal, status, reason,
             motion_time_s))
@@ -357,7 +364,6 @@ class PlannerNode(Node):
                 return
             if not job.is_call:
                 self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
-            self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s)
             if outcome.succeeded:
                 traj = outcome.trajectory
                 self._trajectories.publish(trajectory_msg(traj))
@@ -366,6 +372,8 @@ class PlannerNode(Node):
                     self._paths.publish(outcome.path or path_msg(s.arm, traj,
                                                                  self._header(s.base_frame)))
                 self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
+            # after the trajectory: a caller told "succeeded" finds it published
+            self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s)
         if outcome.succeeded:
             self.get_logger().info(outcome.log)
         else:
@@ -385,16 +393,15 @@ class PlannerNode(Node):
         """
         if job.is_call:
             self._answer(job, None)
-        if not self._settle(job):
-            return
-        if not job.is_call:
-            self._counters.add('goals_failed')
-        if not reason:
-            given = ('answered with a plan; not published' if job.planned_answer
-                     else 'unplanned')
-            reason = f'{given}: shutting down'
-            self.get_logger().info(f'{job.label} {jobs.describe_goal(job.goal)} m: {reason}')
-        self._publish_outcome(job, status, reason)
+        if self._settle(job):
+            if not job.is_call:
+                self._counters.add('goals_failed')
+            if not reason:
+                given = ('answered with a plan; not published' if job.planned_answer
+                         else 'unplanned')
+                reason = f'{given}: shutting down'
+                self.get_logger().info(f'{job.label} {jobs.describe_goal(job.goal)} m: {reason}')
+        self._publish_outcome(job, status, reason or 'shutting down')   # unless told already
 
     def _answer(self, job: Job, path: Path | None) -> None:
         """Hand a call its answer (once), for the executor thread to complete its Future."""

@@ -6,8 +6,9 @@ What became of each goal and call, as diagnostic_msgs/DiagnosticStatus on ``plan
 GetPlan has no field for a reason and a topic goal has no answer, so the node publishes one
 status per goal and per call when it ends: planned, refused, not reached, timed out,
 superseded or unplanned at shutdown. A caller finds its own by what it sent: a call by its
-``goal.header.stamp`` (which the client makes unique), a topic goal by its point. The status's
-``message`` is the reason, as the node logs it.
+``goal.header.stamp`` (which the client makes unique), a topic goal by its point among the
+outcomes that arrive after it sent it (the ones before are a late joiner's history). The
+status's ``message`` is the reason, as the node logs it.
 
 Fields: ``level`` OK (planned), WARN (superseded, or unplanned at shutdown) or ERROR (every
 other end); ``name`` the node and the job (``/trajplan: service call #3``); ``values``:
@@ -21,12 +22,17 @@ from __future__ import annotations
 from typing import Sequence
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 
-__all__ = ['TOPIC', 'describe_stamp', 'outcome_status', 'outcome_values']
+__all__ = ['QOS', 'TOPIC', 'describe_stamp', 'outcome_status', 'outcome_values']
 
 #: The topic the node publishes every outcome on (relative: it follows the node's namespace).
 TOPIC = 'plan_results'
+#: Reliable, and the last 100 kept for a subscriber that matches late (transient local): a
+#: caller's request can reach the node before the node has matched the caller's subscription.
+QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: Statuses that are not the caller's goal's fault: WARN, not ERROR.
 _WARNINGS = ('superseded', 'shut_down')
 

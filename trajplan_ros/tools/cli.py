@@ -17,9 +17,10 @@ from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanResult, PlanStatus, prepare)
+from trajplan_ros.planning.trajectory import trajectory_points
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, finite_number,
-                                          UsageError)
+                                          positive_count, UsageError)
 
 
 __all__ = ['main', 'build_parser']
@@ -57,6 +58,9 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                         '"positions", "velocities", "accelerations"}]} (null unless planned)')
     p.add_argument('--sample-period', type=finite_number, default=0.1, metavar='S',
                    help='time between trajectory points in seconds (default %(default)s)')
+    p.add_argument('--max-trajectory-points', type=positive_count, default=10000, metavar='N',
+                   help='a longer trajectory is not built: "trajectory" is null and the '
+                        "message says why (default %(default)s, the node's default)")
     add_arm_arguments(p)
     p.set_defaults(run=_run_plan)
 
@@ -152,8 +156,15 @@ def _record(result: PlanResult, line: int | None, arm: ArmModel,
     """
     record = {'line': line, **result.to_dict(), 'joint_names': list(arm.joint_names)}
     if args.trajectory:
-        record['trajectory'] = (result.trajectory(arm, args.sample_period).to_dict()
-                                if result.success else None)
+        record['trajectory'] = None
+        if result.success:
+            points = trajectory_points(result.start, result.joint_goal,
+                                       arm.speeds(args.angular_velocity), args.sample_period)
+            if points <= args.max_trajectory_points:
+                record['trajectory'] = result.trajectory(arm, args.sample_period).to_dict()
+            else:
+                record['message'] += (f'; no trajectory: it would need {points} points, more '
+                                      f'than --max-trajectory-points {args.max_trajectory_points}')
     return record
 
 

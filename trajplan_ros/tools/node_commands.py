@@ -57,9 +57,11 @@ def print_trajectory(trajectory: Any, topic: str) -> None:
     print('planned joint angles [rad]: ' + '  '.join(
         f'{n}={q:+.6f}' for n, q in zip(trajectory.joint_names, last.positions)))
     print(f'motion time: {_seconds(last.time_from_start):.4f} s')
-    stamp = trajectory.header.stamp
+    from trajplan_ros.ros.outcomes import describe_stamp
+
+    stamp = describe_stamp((trajectory.header.stamp.sec, trajectory.header.stamp.nanosec))
     print(f'JointTrajectory on {topic}: {len(trajectory.points)} points, joints '
-          f"{', '.join(trajectory.joint_names)}; header.stamp {stamp.sec}.{stamp.nanosec:09d} "
+          f"{', '.join(trajectory.joint_names)}; header.stamp {stamp} "
           f'(start now); time_from_start {_seconds(first.time_from_start):.3f} .. '
           f'{_seconds(last.time_from_start):.3f} s; points carry {_fields(last)}')
 
@@ -105,7 +107,7 @@ def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
 
 
 def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeout: float,
-                 trajectory_topic: str | None) -> int:
+                 trajectory_topic: str | None, results_topic: str | None = None) -> int:
     """
     Call the planning service with ``goal`` and print the answer; 0 for a plan, 1 for none.
 
@@ -115,16 +117,18 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     from diagnostic_msgs.msg import DiagnosticStatus
     from nav_msgs.srv import GetPlan
     from trajectory_msgs.msg import JointTrajectory
-    from trajplan_ros.ros.outcomes import describe_stamp
+    from trajplan_ros.ros import outcomes
     from trajplan_ros.tools.ros_client import plan_request
 
     ros.client(GetPlan, service, timeout)                 # the node first, then its results
-    results = ros.inbox(DiagnosticStatus, _beside(service, 'plan_results'), timeout)
+    results = ros.inbox(DiagnosticStatus, results_topic or _beside(service, outcomes.TOPIC),
+                        timeout, outcomes.QOS)
     box = ros.inbox(JointTrajectory, trajectory_topic, timeout) if trajectory_topic else None
     print(f'calling {service}, goal ({goal[0]}, {goal[1]}, {goal[2]}) m')
     request = plan_request(goal, tolerance)
     request.goal.header.stamp = ros.node.get_clock().now().to_msg()
-    stamp = describe_stamp((request.goal.header.stamp.sec, request.goal.header.stamp.nanosec))
+    stamp = outcomes.describe_stamp((request.goal.header.stamp.sec,
+                                     request.goal.header.stamp.nanosec))
     path = ros.call(GetPlan, service, request, timeout).plan
     if not path.poses:
         _, line = _outcome(results, timeout, 'the call',
@@ -145,7 +149,7 @@ def _run_call(args: argparse.Namespace) -> int:
     with RosClient('trajplan_call') as ros:
         return call_planner(ros, _goal(args), service=args.service,
                             tolerance=args.tolerance, timeout=args.timeout,
-                            trajectory_topic=args.trajectory)
+                            trajectory_topic=args.trajectory, results_topic=args.results)
 
 
 def _run_goal(args: argparse.Namespace) -> int:
@@ -153,14 +157,18 @@ def _run_goal(args: argparse.Namespace) -> int:
     from diagnostic_msgs.msg import DiagnosticStatus
     from geometry_msgs.msg import Point
     from trajectory_msgs.msg import JointTrajectory
+    from trajplan_ros.ros import outcomes
     from trajplan_ros.tools.ros_client import RosClient
 
     x, y, z = goal = _goal(args)
     with RosClient('trajplan_goal') as ros:
-        results = ros.inbox(DiagnosticStatus, _beside(args.topic, 'plan_results'),
-                            args.timeout)
+        results = ros.inbox(DiagnosticStatus, args.results or _beside(args.topic, outcomes.TOPIC),
+                            args.timeout, outcomes.QOS)
         box = (ros.inbox(JointTrajectory, args.trajectory, args.timeout) if args.trajectory
                else None)
+        ros.publisher(Point, args.topic, args.timeout)   # matched: the history has come
+        while not results.empty():                # earlier goals' outcomes (history): not ours
+            results.get_nowait()
         ros.publish(Point, args.topic, Point(x=x, y=y, z=z), args.timeout)
         print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
         planned, line = _outcome(results, args.timeout, 'the goal', _is_point(goal))
@@ -193,6 +201,9 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument('--trajectory', metavar='TOPIC', nargs='?', const='joint_trajectory',
                    help='also print the JointTrajectory the node publishes (on TOPIC, default '
                         'joint_trajectory)')
+    p.add_argument('--results', metavar='TOPIC',
+                   help="the node's plan_results topic (default: plan_results beside the "
+                        'service or goal topic)')
 
 
 def add_call_parser(sub: argparse._SubParsersAction) -> None:

@@ -177,11 +177,12 @@ class RosClient:
             raise TimeoutError(f'the subscribers on {topic} did not acknowledge within '
                                f'{timeout:g} s')
 
-    def inbox(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S) -> queue.Queue[Any]:
+    def inbox(self, msg_type: Any, topic: str, timeout: float = TIMEOUT_S,
+              qos: QoSProfile | int = 10) -> queue.Queue[Any]:
         """Return a queue of the messages arriving on ``topic``, once a publisher matched."""
         if topic not in self._inboxes:
             box: queue.Queue[Any] = queue.Queue()
-            sub = self.node.create_subscription(msg_type, topic, box.put, 10)
+            sub = self.node.create_subscription(msg_type, topic, box.put, qos)
             self._inboxes[topic] = (sub, box)
         sub, box = self._inboxes[topic]
         _wait_for_peer(lambda: sub.get_publisher_count() > 0, timeout, f'publisher on {topic}')
