@@ -9,9 +9,10 @@ from scipy.optimize import linprog
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import iepso as iepso_module, plan
+from trajplan_ros.planning.active_set import active_pieces, solve_augmented, sqp_steps
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
-                                          _pieces, _sqp_steps, Linearisation, polish)
+                                          Linearisation, polish)
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -106,7 +107,7 @@ def kkt_step(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, used: list[int
     # multipliers: min |g^T y|^2 subject to tie . y = 1
     ls = np.block([[g @ g.T, tie[:, None]], [tie[None, :], np.zeros((1, 1))]])
     y = np.linalg.lstsq(ls, np.eye(p + 1)[p], rcond=None)[0][:p]
-    kkt = np.block([[np.einsum('abp,p->ab', hess[:, :, used], y), np.zeros((k, 1)), g.T],
+    kkt = np.block([[np.einsum('pab,p->ab', hess[used], y), np.zeros((k, 1)), g.T],
                     [np.zeros((1, k + 1)), -tie[None, :]],
                     [g, -tie[:, None], np.zeros((p, p))]])
     right = np.concatenate((np.zeros(k), [-1.0], rhs[used]))
@@ -127,8 +128,9 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     quad = 0.5 * (quad + np.swapaxes(quad, 1, 2))
     b = rng.uniform(-3.0, 3.0, (6, m))
     gap_lo, gap_hi = rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m))
-    grad, hess, rhs, joint = _pieces(b, null, quad, rng.uniform(1.0, 2.0, m), gap_lo, gap_hi, r)
-    z = _sqp_steps(grad, hess, rhs, joint, sets)
+    grad, hess, rhs, joint = active_pieces(b, null, quad, rng.uniform(1.0, 2.0, m), gap_lo,
+                                           gap_hi, r)
+    z = sqp_steps(grad, hess, rhs, joint, pieces, sets.vertex, sets.clashes, r)
     for i in range(6):
         for c, (set_pieces, set_ties) in enumerate(zip(pieces, ties)):
             used = [int(p) for p in set_pieces if p != r + k]
@@ -138,6 +140,20 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
                 continue
             want = kkt_step(grad[i], hess[i], rhs[i], used, list(set_ties[: len(used)] > 0))
             np.testing.assert_allclose(z[i, c], want, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize('n', range(1, 7))
+def test_the_small_solves_are_numpys(n: int) -> None:
+    # Cramer's rule up to 3x3, Gaussian elimination beyond: against LAPACK, and a singular
+    # system is flagged (its solution not finite)
+    rng = np.random.default_rng(n)
+    for _ in range(50):
+        a, x = rng.normal(size=(n, n)), rng.normal(size=n)
+        m = np.concatenate((a, (a @ x)[:, None]), axis=1)
+        assert solve_augmented(m, n)
+        np.testing.assert_allclose(m[:, n], np.linalg.solve(a, a @ x), rtol=1e-9, atol=1e-9)
+    a[:, -1] = 0.0
+    assert not solve_augmented(np.concatenate((a, np.ones((n, 1))), axis=1), n)
 
 
 @pytest.mark.parametrize('name', ['so101', 'ur5', 'panda', 'xarm7'])

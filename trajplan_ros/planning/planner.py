@@ -264,11 +264,32 @@ def _outcome(obj: Objective, found: OptimizeResult, limits: _Limits, clock: floa
 _WARM_UP_GOAL = (0.151171, 0.19162, 0.172124)
 
 
+def _six_joint_arm() -> ArmModel:
+    """
+    Return a made-up six-joint arm (standard DH), for ``prepare``.
+
+    In free mode its goals are reached on sets of two or more dimensions, where the polish takes
+    the SQP step over active sets (``active_set``), which the paper's arm never does.
+    """
+    half = np.pi / 2
+    return ArmModel.from_dh(a=(0.0, 0.3, 0.25, 0.0, 0.0, 0.0),
+                            alpha=(half, 0.0, 0.0, half, -half, 0.0),
+                            d=(0.1, 0.0, 0.0, 0.1, 0.08, 0.05), lower=[-np.pi] * 6,
+                            upper=[np.pi] * 6)
+
+
 def prepare() -> Warmup:
     """
     Compile or load the kernels ``plan`` uses, so that no plan pays for it; say what it did.
 
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
-    the paper's arm once in each mode (a kernel's machine code serves every arm).
+    the paper's arm once in each mode and a made-up six-joint arm once in free mode (a kernel's
+    machine code serves every arm; the six joints reach the polish's SQP step).
     """
-    return warm_up(lambda: [plan(_WARM_UP_GOAL, mode=mode, seed=0) for mode in Mode])
+    def plans() -> None:
+        for mode in Mode:
+            plan(_WARM_UP_GOAL, mode=mode, seed=0)
+        arm = _six_joint_arm()
+        plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
+
+    return warm_up(plans)

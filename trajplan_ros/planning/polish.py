@@ -51,6 +51,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from trajplan_ros.kinematics.arm import ToolJacobian
+from trajplan_ros.planning.active_set import minimax_step
 from trajplan_ros.planning.objective import Objective
 
 __all__ = ['Linearisation', 'polish', 'settle']
@@ -120,170 +121,6 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     return _ActiveSets(pieces, ~(pieces == unused).any(axis=1), clashes, r)
 
 
-def _pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
-            gap_lo: np.ndarray, gap_hi: np.ndarray, r: int
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """
-    Return the pieces of ``_active_sets`` per candidate: gradients, Hessians, KKT right sides.
-
-    Pieces: the r largest scaled displacements, each with its sign (g z - t = -e, e its size at
-    z = 0), the k nearest limits (n z = the gap to the limit), an unused slot (zeros).
-    Gradients (K, P, k), Hessians (K, k, k, P), right sides (K, P), and the joint of each
-    piece (K, P; -1 for the unused slot), with P = r + k + 1 pieces.
-    """
-    k_count, k, m = null.shape
-    rows_k = np.arange(k_count)[:, None]
-    sign = np.where(b >= 0.0, 1.0, -1.0) * scale
-    size = np.abs(b) * scale
-    top = np.argsort(-size, axis=1)[:, :r]                                  # (K, r)
-    walls = np.argsort(np.minimum(gap_hi, -gap_lo), axis=1)[:, :k]          # (K, k)
-    joint = np.concatenate((top, walls, np.full((k_count, 1), -1)), axis=1)
-    # each piece's sign: the joint's for a displacement, 1 for a limit, 0 for the unused slot
-    weight = np.concatenate((sign[rows_k, top], np.ones((k_count, k)),
-                             np.zeros((k_count, 1))), axis=1)
-    grad = np.swapaxes(null, 1, 2)[rows_k, joint] * weight[:, :, None]
-    hess = (np.take_along_axis(quad, joint[:, None, None, :], axis=3)
-            * (2.0 * weight[:, None, None]))
-    near = np.where(gap_hi < -gap_lo, gap_hi, gap_lo)[rows_k, walls]
-    rhs = np.concatenate((-size[rows_k, top], near, np.zeros((k_count, 1))), axis=1)
-    return grad, hess, rhs, joint
-
-
-def _sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.ndarray,
-               sets: _ActiveSets) -> np.ndarray:
-    """
-    Return the SQP step z (K, C, k) of every active set (``_active_set_minimax``).
-
-    The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
-    Its first piece is the largest joint's (a tie), so t = g_0 z + e_0, and what is left is in
-    z alone: (g_s - tie_s g_0) z = rhs_s - tie_s rhs_0 for the other pieces s. A set of k + 1
-    pieces (a vertex: no unused slot) fixes z by those k equations alone (``_vertex_steps``);
-    a smaller one takes the Hessian of the Lagrangian into account (``_kkt_steps``). A set that
-    ties a joint it also holds at a limit has no step (z = 0). On sets of k >= 2 dimensions.
-    """
-    pieces, vertex, clashes, r = sets
-    k = grad.shape[2]
-    at_limit = joint[:, :r, None] == joint[:, None, r: r + k]               # (K, r, k)
-    clash = at_limit.reshape(len(joint), -1) @ clashes > 0.0                # (K, C)
-    # each piece's equation in z alone, (K, P, k) and (K, P) (zero for piece 0 and
-    # for the unused slot)
-    tie = (np.arange(rhs.shape[1]) < r).astype(float)
-    rows = grad - tie[:, None] * grad[:, :1]
-    values = rhs - tie * rhs[:, :1]
-    others = pieces[:, 1:]
-    z = np.empty(clash.shape + grad.shape[2:])
-    z[:, vertex] = _vertex_steps(rows[:, others[vertex]], values[:, others[vertex]],
-                                 clash[:, vertex])
-    if not vertex.all():
-        z[:, ~vertex] = _kkt_steps(hess, grad[:, 0], rows, values, pieces[~vertex], r + k,
-                                   tie, clash[:, ~vertex])
-    return np.where(np.isfinite(z).all(axis=2, keepdims=True), z, 0.0)
-
-
-def _vertex_steps(rows: np.ndarray, values: np.ndarray, clash: np.ndarray) -> np.ndarray:
-    """Return z (K, V, k) of vertex sets: rows z = values (``_sqp_steps``); clash sets: 0."""
-    k = rows.shape[-1]
-    rows = np.where(clash[..., None, None], np.eye(k), rows)
-    return _solve_small(rows + 1e-13 * np.eye(k), np.where(clash[..., None], 0.0, values))
-
-
-def _kkt_steps(hess: np.ndarray, g0: np.ndarray, rows: np.ndarray, values: np.ndarray,
-               pieces: np.ndarray, unused: int, tie: np.ndarray, clash: np.ndarray
-               ) -> np.ndarray:
-    """
-    Return z (K, C, k) of the sets ``pieces`` (C, p) with ``unused`` slots (``_sqp_steps``).
-
-    min g_0 z + z^T H z / 2 subject to the set's other pieces' ``rows`` z = ``values`` (at most
-    k - 1; rows and values by piece, ``tie`` by piece), with H the Hessian of the Lagrangian
-    sum_s y_s H_s taken at least-squares multipliers (min |sum_s y_s g_s| with the ties' y
-    summing to 1) and a ridge of 1e-13: with no row the stationary point of the largest
-    joint's displacement; with k - 1 rows (k <= 3) along the line they leave, in closed form;
-    else by the KKT system. ``clash`` sets get z = 0.
-    """
-    k = g0.shape[-1]
-    others = pieces[:, 1:k]                                                 # (C, k - 1)
-    used = others != unused
-    # the other pieces' multipliers: least |g_0 + rows^T y| (rows = g_s - tie_s g_0)
-    gram = _dot(rows[:, :, None, :], rows[:, None, :, :])[:, others[:, :, None], others[:, None]]
-    ridge = 1e-12 * sum(gram[..., i, i] for i in range(k - 1)) + 1e-300
-    gram = gram + (ridge[..., None, None] + ~used[:, :, None]) * np.eye(k - 1)
-    y = _solve_small(gram, -_dot(rows, g0[:, None, :])[:, others])
-    weights = [1.0 - _dot(tie[others], y)] + [y[..., s] for s in range(k - 1)]
-    h = np.moveaxis(hess, 3, 1)[:, pieces[:, :k]]                           # (K, C, k, k, k)
-    lagrangian = sum(w[..., None, None] * h[:, :, s] for s, w in enumerate(weights))
-    lagrangian = lagrangian + 1e-13 * np.eye(k)
-    rows, values = rows[:, others], values[:, others]                       # (K, C, k - 1, k)
-    g0 = np.broadcast_to(g0[:, None, :], (len(g0), len(pieces), k))
-    count = used.sum(axis=1)
-    z = np.empty(g0.shape)
-    for c in np.unique(count):
-        sel = count == c
-        hl, gs, rs, vs = lagrangian[:, sel], g0[:, sel], rows[:, sel, :c], values[:, sel, :c]
-        if c == 0:
-            z[:, sel] = _solve_small(hl, -gs)
-        elif c == k - 1 and k <= 3:         # the least-norm solution plus s times the line's n
-            n = (np.stack((-rs[..., 0, 1], rs[..., 0, 0]), axis=-1) if k == 2
-                 else _cross(rs[..., 0, :], rs[..., 1, :]))
-            base = _dot(np.swapaxes(rs, -1, -2),
-                        _solve_small(gram[:, sel, :c, :c], vs)[..., None, :])
-            hn = _dot(hl, n[..., None, :])
-            with np.errstate(all='ignore'):
-                s = -(_dot(gs, n) + _dot(hn, base)) / _dot(hn, n)
-            z[:, sel] = base + s[..., None] * n
-        else:
-            border = np.zeros(gs.shape[:2] + (k + c, k + c))
-            border[..., :k, :k] = hl
-            border[..., k:, :k] = rs
-            border[..., :k, k:] = np.swapaxes(rs, -1, -2)
-            border[..., k:, k:] = 1e-13 * np.eye(c)
-            z[:, sel] = _solve_small(border, np.concatenate((-gs, vs), axis=-1))[..., :k]
-    return np.where(clash[..., None] | ~np.isfinite(z), 0.0, z)
-
-
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the sums of products over the last axis (of a few entries), as a fold."""
-    return functools.reduce(np.add, [a[..., i] * b[..., i] for i in range(a.shape[-1])])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the cross products of 3-vectors (..., 3)."""
-    return np.stack((a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]), axis=-1)
-
-
-def _solve_small(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """
-    Return x with a x = b, for a (..., n, n) and b (..., n).
-
-    Closed forms for n <= 3 (many tiny LAPACK calls cost more); ``_solve`` otherwise.
-    """
-    n = a.shape[-1]
-    if n > 3:
-        return _solve(a, b[..., None])[..., 0]
-    with np.errstate(all='ignore'):
-        if n == 1:
-            return b / a[..., 0]
-        if n == 2:
-            det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
-            return np.stack((a[..., 1, 1] * b[..., 0] - a[..., 0, 1] * b[..., 1],
-                             a[..., 0, 0] * b[..., 1] - a[..., 1, 0] * b[..., 0]),
-                            axis=-1) / det[..., None]
-        # x = sum_s b_s (a_{s+1} x a_{s+2}) / det, over the rows a_s
-        c = _cross(a[..., [1, 2, 0], :], a[..., [2, 0, 1], :])
-        det = _dot(a[..., 0, :], c[..., 0, :])
-        return _dot(np.swapaxes(c, -1, -2), b[..., None, :]) / det[..., None]
-
-
-def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return np.linalg.solve(a, b); least squares for all when one matrix is exactly singular."""
-    with np.errstate(all='ignore'):
-        try:
-            return np.linalg.solve(a, b)
-        except np.linalg.LinAlgError:
-            return np.linalg.pinv(a) @ b
-
-
 def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
                         gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray,
                         vertex_only: bool = False) -> np.ndarray:
@@ -291,31 +128,18 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     Return z (K, k) that minimises max_i scale_i |d_i(z)| on the quadratic model of the solutions.
 
     d(z) = b + z N + z^T Q z (b (K, m): displacements; ``null`` (K, k, m): N, orthonormal rows;
-    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions). The steps must keep
-    the joints within [gap_lo, gap_hi] and ||z|| within ``limit``. Each active set (joints tying
-    with the largest displacement, each with its sign at z = 0, and any of the k nearest
-    limits) gives the SQP step of min t subject to those pieces = t (the limits
-    reached), ``_sqp_steps``. With k + 1 pieces that is a vertex of the linear model, whatever
-    the Hessian. Every step is shortened to the trust radius and judged on the model: its linear
-    part must keep within the limits, and where the curvature term passes a limit the joint is
-    clipped to it; the best, or z = 0, wins. ``vertex_only``: the vertices alone (cheaper).
+    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions; ``scale`` (m,)).
+    The steps keep the joints within [gap_lo, gap_hi] and ||z|| within ``limit`` (K,). The SQP
+    step of each active set (``_active_sets`` of the k + _LARGEST largest displacements) is
+    judged on the model, compiled (``active_set.minimax_step``); ``vertex_only``: the vertices
+    alone (cheaper).
     """
-    k_count, k, m = null.shape
+    k, m = null.shape[1:]
     r = min(m, k + _LARGEST)
-    z = _sqp_steps(*_pieces(b, null, quad, scale, gap_lo, gap_hi, r),
-                   _active_sets(r, k, vertex_only))
-    z = np.concatenate((np.zeros((k_count, 1, k)), z), axis=1)            # (K, C + 1, k)
-    z = _within(z, limit[:, None])
-    linear = z @ null
-    pairs = (z[..., :, None] * z[..., None, :]).reshape(k_count, -1, k * k)
-    step = linear + pairs @ quad.reshape(k_count, k * k, m)
-    lo, hi = gap_lo[:, None, :], gap_hi[:, None, :]
-    # folds over the few joints: several times faster than reductions over a short last axis
-    usable = functools.reduce(np.logical_and,
-                              np.moveaxis((linear >= lo - 1e-12) & (linear <= hi + 1e-12), 2, 0))
-    moved = np.abs(b[:, None, :] + np.clip(step, lo, hi)) * scale
-    worst = functools.reduce(np.maximum, np.moveaxis(moved, 2, 0))
-    return z[np.arange(k_count), np.argmin(np.where(usable, worst, np.inf), axis=1)]
+    sets = _active_sets(r, k, vertex_only)
+    arrays = [np.ascontiguousarray(a, dtype=float)
+              for a in (b, null, quad, scale, gap_lo, gap_hi, limit)]
+    return minimax_step(*arrays, sets.pieces, sets.vertex, sets.clashes, r)
 
 
 def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
