@@ -24,9 +24,10 @@ pivoting beyond. A singular system gives inf or NaN (np.divide: numpy's quotient
 would raise), and a step that is not finite is dropped: a vertex set's whole, a KKT set's
 component by component (z = 0 there).
 
-The kernels called once per set take no allocation and no branch that ends an array's use
-early: numba then holds no reference count on their arrays (a pair of atomic operations per
-array and call, which cost more than the arithmetic here).
+Each kernel works through every candidate and set, calling only ``solve_augmented`` (one
+array) per system: numba holds a reference count, a pair of atomic operations, on each array
+a kernel is passed unless its control flow is simple, and per set that cost more than the
+arithmetic.
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
 
-__all__ = ['active_pieces', 'minimax_step', 'sqp_steps']
+__all__ = ['active_pieces', 'best_steps', 'minimax_step', 'solve_augmented', 'sqp_steps']
 
 #: Ridge (on the diagonal) that keeps the small systems regular: the vertex equations, the
 #: Hessian of the Lagrangian and the bordered KKT systems' lower right block.
@@ -154,166 +155,301 @@ def active_pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.n
 
 
 @kernel
+def piece_equations(grad: np.ndarray, rhs: np.ndarray, r: int,
+                    products: bool) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return each piece's equation in z alone, and (with ``products``) their dot products.
+
+    Piece 0 is the largest joint's (a tie), so t = g_0 z + e_0, and what is left of the set's
+    pieces is (g_s - tie_s g_0) z = rhs_s - tie_s rhs_0: ``rows`` (K, P, k + 1) = [rows |
+    values], zero for piece 0 and for the unused slot. ``dots`` (K, P, P + 1): rows_p .
+    rows_q, and in its last column rows_p . g_0 (what the KKT systems need).
+    """
+    n_cand, n_pieces, k = grad.shape
+    rows = np.empty((n_cand, n_pieces, k + 1))
+    dots = np.empty((n_cand, n_pieces if products else 0, n_pieces + 1))
+    for i in range(n_cand):
+        for p in range(n_pieces):
+            tie = 1.0 if p < r else 0.0
+            for c in range(k):
+                rows[i, p, c] = grad[i, p, c] - tie * grad[i, 0, c]
+            rows[i, p, k] = rhs[i, p] - tie * rhs[i, 0]
+        for p in range(dots.shape[1]):
+            for q in range(n_pieces):
+                total = 0.0
+                for c in range(k):
+                    total += rows[i, p, c] * rows[i, q, c]
+                dots[i, p, q] = total
+            total = 0.0
+            for c in range(k):
+                total += rows[i, p, c] * grad[i, 0, c]
+            dots[i, p, n_pieces] = total
+    return rows, dots
+
+
+@kernel
+def clashing(joint: np.ndarray, clashes: np.ndarray, r: int) -> np.ndarray:
+    """
+    Return (K, C): the sets that tie a joint they also hold at a limit (they take no step).
+
+    ``clashes`` (r k, C): 1 where a set holds joint piece t and limit piece r + w (row t k + w).
+    """
+    n_cand, n_sets, k = joint.shape[0], clashes.shape[1], clashes.shape[0] // r
+    clash = np.zeros((n_cand, n_sets), dtype=np.bool_)
+    for i in range(n_cand):
+        for t in range(r):
+            for w in range(k):
+                if joint[i, t] == joint[i, r + w]:
+                    for s in range(n_sets):
+                        clash[i, s] = clash[i, s] or clashes[t * k + w, s] > 0.0
+    return clash
+
+
+@kernel
+def vertex_steps(rows: np.ndarray, pieces: np.ndarray, skip: np.ndarray,
+                 steps: np.ndarray) -> None:
+    """
+    Set ``steps`` (K, C, k) of the vertex sets but ``skip`` (K, C): their other pieces' rows.
+
+    A vertex (k + 1 pieces, no unused slot) fixes z by its k equations rows z = values alone
+    (ridged), whatever the Hessian; a step that is not finite is dropped whole (z = 0).
+    """
+    n_cand, n_sets, k = steps.shape
+    m = np.empty((k, k + 1))
+    for i in range(n_cand):
+        for t in range(n_sets):
+            if skip[i, t]:
+                continue
+            for s in range(k):
+                piece = pieces[t, 1 + s]
+                for c in range(k + 1):
+                    m[s, c] = rows[i, piece, c] + (RIDGE if s == c else 0.0)
+            finite = solve_augmented(m, k)
+            for c in range(k):
+                steps[i, t, c] = m[c, k] if finite else 0.0
+
+
+@kernel
+def lagrangian_hessians(hess: np.ndarray, dots: np.ndarray, pieces: np.ndarray,
+                        skip: np.ndarray, r: int) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the Hessians of the Lagrangian (K, C, k, k) of the sets but ``skip``, and Gram matrices.
+
+    H = sum_s y_s H_s + 1e-13 I, at least-squares multipliers: min |sum_s y_s g_s| with the
+    ties' y summing to 1, that is the other pieces' y minimising |g_0 + rows^T y| (by their
+    Gram matrix, (K, C, k - 1, k - 1), with a ridge of 1e-12 its trace + 1e-300 and 1 on the
+    unused slots' diagonal) and y_0 = 1 - the other ties' y. ``dots``: ``piece_equations``.
+    """
+    n_cand, n_pieces, k = hess.shape[:3]
+    n_sets, unused = pieces.shape[0], r + k
+    lagrangian, gram = np.zeros((n_cand, n_sets, k, k)), np.zeros((n_cand, n_sets, k, k))
+    m = np.empty((k, k))
+    for i in range(n_cand):
+        for t in range(n_sets):
+            if skip[i, t]:
+                continue
+            trace = 0.0
+            for s in range(k - 1):
+                trace += dots[i, pieces[t, 1 + s], pieces[t, 1 + s]]
+            ridge = GRAM_RIDGE * trace + 1e-300
+            for s in range(k - 1):
+                ps = pieces[t, 1 + s]
+                for u in range(k - 1):
+                    gram[i, t, s, u] = dots[i, ps, pieces[t, 1 + u]]
+                gram[i, t, s, s] += ridge + (1.0 if ps == unused else 0.0)
+                for u in range(k - 1):
+                    m[s, u] = gram[i, t, s, u]
+                m[s, k - 1] = -dots[i, ps, n_pieces]
+            solve_augmented(m, k - 1)           # y_1..y_{k-1} in m[:k - 1, k - 1]
+            tied = 0.0
+            for s in range(k - 1):
+                tied += (1.0 if pieces[t, 1 + s] < r else 0.0) * m[s, k - 1]
+            for s in range(k):
+                weight = 1.0 - tied if s == 0 else m[s - 1, k - 1]
+                for a in range(k):
+                    for c in range(k):
+                        lagrangian[i, t, a, c] += weight * hess[i, pieces[t, s], a, c]
+            for a in range(k):
+                lagrangian[i, t, a, a] += RIDGE
+    return lagrangian, gram
+
+
+@kernel
+def line_steps(lagrangian: np.ndarray, gram: np.ndarray, rows: np.ndarray, grad: np.ndarray,
+               pieces: np.ndarray, skip: np.ndarray, steps: np.ndarray) -> None:
+    """
+    Set ``steps`` of the sets of k - 1 rows (k <= 3) but ``skip``: min g_0 z + z^T H z / 2.
+
+    Along the line the rows leave: the least-norm solution (base, by their Gram matrix) plus s
+    times the line's direction n (normal to the row, or the rows' cross product), s = -(g_0 n
+    + n^T H base) / n^T H n. Non-finite components are set to 0.
+    """
+    n_cand, n_sets, k = steps.shape
+    c = k - 1
+    m, line = np.empty((k, k)), np.empty(k)
+    for i in range(n_cand):
+        for t in range(n_sets):
+            if skip[i, t]:
+                continue
+            p0, p1 = pieces[t, 1], pieces[t, c]
+            if k == 2:
+                line[0], line[1] = -rows[i, p0, 1], rows[i, p0, 0]
+            else:
+                line[0] = rows[i, p0, 1] * rows[i, p1, 2] - rows[i, p0, 2] * rows[i, p1, 1]
+                line[1] = rows[i, p0, 2] * rows[i, p1, 0] - rows[i, p0, 0] * rows[i, p1, 2]
+                line[2] = rows[i, p0, 0] * rows[i, p1, 1] - rows[i, p0, 1] * rows[i, p1, 0]
+            for s in range(c):
+                for u in range(c):
+                    m[s, u] = gram[i, t, s, u]
+                m[s, c] = rows[i, pieces[t, 1 + s], k]
+            solve_augmented(m, c)
+            pull, along, curved = 0.0, 0.0, 0.0     # g_0 n, n^T H base, n^T H n
+            for a in range(k):
+                base = 0.0
+                for s in range(c):
+                    base += rows[i, pieces[t, 1 + s], a] * m[s, c]
+                steps[i, t, a] = base
+            for a in range(k):
+                pull += grad[i, 0, a] * line[a]
+                hn = 0.0
+                for u in range(k):
+                    hn += lagrangian[i, t, a, u] * line[u]
+                along += hn * steps[i, t, a]
+                curved += hn * line[a]
+            along = np.divide(-(pull + along), curved)
+            for a in range(k):
+                z = steps[i, t, a] + along * line[a]
+                steps[i, t, a] = z if np.isfinite(z) else 0.0
+
+
+@kernel
+def bordered_steps(lagrangian: np.ndarray, rows: np.ndarray, grad: np.ndarray,
+                   pieces: np.ndarray, skip: np.ndarray, r: int, steps: np.ndarray) -> None:
+    """
+    Set ``steps`` of the sets but ``skip`` by their KKT systems: min g_0 z + z^T H z / 2.
+
+    Subject to the set's other pieces' rows z = values (their ``count``, unused slots last):
+    [[H, rows^T], [rows, 1e-13 I]] [z; -mu] = [-g_0; values]; with no row, H z = -g_0 (the
+    stationary point of the largest joint's displacement). Non-finite components are set to 0.
+    """
+    n_cand, n_sets, k = steps.shape
+    m = np.empty((2 * k, 2 * k + 1))
+    for i in range(n_cand):
+        for t in range(n_sets):
+            if skip[i, t]:
+                continue
+            count = 0
+            for c in range(k - 1):
+                count += 1 if pieces[t, 1 + c] != r + k else 0
+            size = k + count
+            for a in range(size):
+                for c in range(size):
+                    m[a, c] = lagrangian[i, t, a, c] if a < k and c < k else 0.0
+            for a in range(k):
+                m[a, size] = -grad[i, 0, a]
+            for s in range(count):
+                ps = pieces[t, 1 + s]
+                for c in range(k):
+                    m[k + s, c] = rows[i, ps, c]
+                    m[c, k + s] = rows[i, ps, c]
+                m[k + s, k + s] = RIDGE
+                m[k + s, size] = rows[i, ps, k]
+            solve_augmented(m, size)
+            for a in range(k):
+                steps[i, t, a] = m[a, size] if np.isfinite(m[a, size]) else 0.0
+
+
+@kernel
 def sqp_steps(grad: np.ndarray, hess: np.ndarray, rhs: np.ndarray, joint: np.ndarray,
               pieces: np.ndarray, vertex: np.ndarray, clashes: np.ndarray,
               r: int) -> np.ndarray:
     """
     Return the SQP step z (K, C, k) of every active set (``minimax_step``).
 
-    The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits).
-    Its first piece is the largest joint's (a tie), so t = g_0 z + e_0, and what is left is in
-    z alone: (g_s - tie_s g_0) z = rhs_s - tie_s rhs_0 for the other pieces s. A set of k + 1
-    pieces (a vertex: no unused slot) fixes z by those k equations alone; a smaller one takes
-    the Hessian of the Lagrangian into account: min g_0 z + z^T H z / 2 subject to its other
-    pieces' rows z = values (at most k - 1), with H = sum_s y_s H_s taken at least-squares
-    multipliers (min |sum_s y_s g_s| with the ties' y summing to 1) and a ridge of 1e-13: with
-    no row the stationary point of the largest joint's displacement; with k - 1 rows (k <= 3)
-    along the line they leave, in closed form; else by the KKT system. A set that ties a joint
-    it also holds at a limit has no step (z = 0). Non-finite steps are dropped: a vertex set's
-    whole, the others' component by component.
+    The problem: min t subject to the set's pieces g z - t = -e (ties) and n z = gap (limits),
+    in z alone (``piece_equations``). A set of k + 1 pieces (a vertex: no unused slot) fixes z
+    by those k equations alone (``vertex_steps``); a smaller one takes the Hessian of the
+    Lagrangian into account (``lagrangian_hessians``): with k - 1 rows (k <= 3) along the
+    line they leave, in closed form (``line_steps``), else by the KKT system
+    (``bordered_steps``). A set that ties a joint it also holds at a limit has no step (z = 0,
+    ``clashing``). The pieces come from ``active_pieces``; the sets ``pieces`` (C, k + 1),
+    ``vertex`` (C,) and ``clashes`` (r k, C) from ``polish._active_sets``, unused slots last.
 
-    The pieces come from ``active_pieces``; the sets ``pieces`` (C, k + 1), ``vertex`` (C,)
-    and ``clashes`` (r k, C) from ``polish._active_sets``, their unused slots last. All in one
-    kernel: a kernel called per set would hold reference counts on its arrays, which cost more
-    than its arithmetic.
+    Each kernel works through every candidate and set, calling only ``solve_augmented``: numba
+    holds a reference count (a pair of atomic operations) on each array a kernel is passed
+    unless its control flow is simple, and per set that cost more than the arithmetic.
     """
-    n_cand, n_pieces, k = grad.shape
-    n_sets, unused = pieces.shape[0], r + k
-    steps = np.empty((n_cand, n_sets, k))
-    rows = np.empty((n_pieces, k + 1))          # each piece's equation in z alone: [rows | values]
-    products = np.empty((n_pieces, n_pieces + 1))   # rows_p . rows_q, then rows_p . g_0
-    held = np.empty(r * k, dtype=np.int64)
-    m = np.empty((2 * k, 2 * k + 1))            # each small system, augmented: [a | b]
-    gram, lagrangian, line = np.empty((k, k)), np.empty((k, k)), np.empty(k)
-    kkt = False                                 # any set but vertices: their KKT systems
-    for t in range(n_sets):
-        kkt = kkt or not vertex[t]
-    for i in range(n_cand):
-        # rows z = values: zero for piece 0 and for the unused slot
-        for p in range(n_pieces):
-            tie = 1.0 if p < r else 0.0
-            for c in range(k):
-                rows[p, c] = grad[i, p, c] - tie * grad[i, 0, c]
-            rows[p, k] = rhs[i, p] - tie * rhs[i, 0]
-        for p in range(n_pieces if kkt else 0):
-            for q in range(n_pieces):
-                total = 0.0
-                for c in range(k):
-                    total += rows[p, c] * rows[q, c]
-                products[p, q] = total
-            total = 0.0
-            for c in range(k):
-                total += rows[p, c] * grad[i, 0, c]
-            products[p, n_pieces] = total
-        # the sets that tie a joint they hold at a limit: rows t k + w of clashes
-        n_held = 0
-        for t in range(r):
-            for w in range(k):
-                if joint[i, t] == joint[i, r + w]:
-                    held[n_held] = t * k + w
-                    n_held += 1
-        for t in range(n_sets):
-            clash = False
-            for h in range(n_held):
-                clash = clash or clashes[held[h], t] > 0.0
-            count = 0                           # the other pieces in use (first in the set)
-            for c in range(k):
-                count += 1 if pieces[t, 1 + c] != unused else 0
-            if clash:
-                for c in range(k):
-                    steps[i, t, c] = 0.0
-                continue
-            if vertex[t]:                       # rows z = values, ridged
-                for s in range(k):
-                    piece = pieces[t, 1 + s]
-                    for c in range(k + 1):
-                        m[s, c] = rows[piece, c] + (RIDGE if s == c else 0.0)
-                finite = solve_augmented(m, k)
-                for c in range(k):
-                    steps[i, t, c] = m[c, k] if finite else 0.0
-                continue
-            # the other pieces' multipliers: least |g_0 + rows^T y|, from their Gram matrix
-            # with a ridge of 1e-12 its trace + 1e-300 (and 1 on the unused slots' diagonal)
-            trace = 0.0
-            for s in range(k - 1):
-                trace += products[pieces[t, 1 + s], pieces[t, 1 + s]]
-            ridge = GRAM_RIDGE * trace + 1e-300
-            for s in range(k - 1):
-                ps = pieces[t, 1 + s]
-                for u in range(k - 1):
-                    gram[s, u] = products[ps, pieces[t, 1 + u]]
-                gram[s, s] += ridge + (1.0 if ps == unused else 0.0)
-                for u in range(k - 1):
-                    m[s, u] = gram[s, u]
-                m[s, k - 1] = -products[ps, n_pieces]
-            solve_augmented(m, k - 1)           # y_1..y_{k-1} in m[:k - 1, k - 1]
-            tied = 0.0                          # y_0 = 1 - the other ties' y
-            for s in range(k - 1):
-                tied += (1.0 if pieces[t, 1 + s] < r else 0.0) * m[s, k - 1]
-            for a in range(k):
-                for c in range(k):
-                    lagrangian[a, c] = 0.0
-            for s in range(k):
-                weight = 1.0 - tied if s == 0 else m[s - 1, k - 1]
-                ps = pieces[t, s]
-                for a in range(k):
-                    for c in range(k):
-                        lagrangian[a, c] += weight * hess[i, ps, a, c]
-            for a in range(k):
-                lagrangian[a, a] += RIDGE
-            if count == k - 1 and k <= 3:
-                # the least-norm solution (base) plus s times the line's direction n
-                p0, p1 = pieces[t, 1], pieces[t, count]
-                if k == 2:
-                    line[0], line[1] = -rows[p0, 1], rows[p0, 0]
-                else:
-                    line[0] = rows[p0, 1] * rows[p1, 2] - rows[p0, 2] * rows[p1, 1]
-                    line[1] = rows[p0, 2] * rows[p1, 0] - rows[p0, 0] * rows[p1, 2]
-                    line[2] = rows[p0, 0] * rows[p1, 1] - rows[p0, 1] * rows[p1, 0]
-                for s in range(count):
-                    for u in range(count):
-                        m[s, u] = gram[s, u]
-                    m[s, count] = rows[pieces[t, 1 + s], k]
-                solve_augmented(m, count)
-                for a in range(k):              # base
-                    total = 0.0
-                    for s in range(count):
-                        total += rows[pieces[t, 1 + s], a] * m[s, count]
-                    steps[i, t, a] = total
-                pull, along, curved = 0.0, 0.0, 0.0     # g_0 n, n^T H base, n^T H n
-                for a in range(k):
-                    pull += grad[i, 0, a] * line[a]
-                    hn = 0.0
-                    for c in range(k):
-                        hn += lagrangian[a, c] * line[c]
-                    along += hn * steps[i, t, a]
-                    curved += hn * line[a]
-                along = np.divide(-(pull + along), curved)
-                for a in range(k):
-                    z = steps[i, t, a] + along * line[a]
-                    steps[i, t, a] = z if np.isfinite(z) else 0.0
-                continue
-            # H z = -g_0 with no row, else the KKT system
-            # [[H, rows^T], [rows, 1e-13 I]] [z; -mu] = [-g_0; values]
-            size = k + count
-            for a in range(size):
-                for c in range(size):
-                    m[a, c] = 0.0
-            for a in range(k):
-                for c in range(k):
-                    m[a, c] = lagrangian[a, c]
-                m[a, size] = -grad[i, 0, a]
-            for s in range(count):
-                ps = pieces[t, 1 + s]
-                for c in range(k):
-                    m[k + s, c] = rows[ps, c]
-                    m[c, k + s] = rows[ps, c]
-                m[k + s, k + s] = RIDGE
-                m[k + s, size] = rows[ps, k]
-            solve_augmented(m, size)
-            for a in range(k):
-                steps[i, t, a] = m[a, size] if np.isfinite(m[a, size]) else 0.0
+    n_cand, k = grad.shape[0], grad.shape[2]
+    kkt = not vertex.all()
+    rows, dots = piece_equations(grad, rhs, r, kkt)
+    clash = clashing(joint, clashes, r)
+    steps = np.zeros((n_cand, pieces.shape[0], k))
+    vertex_steps(rows, pieces, clash | ~vertex, steps)
+    if kkt:
+        lagrangian, gram = lagrangian_hessians(hess, dots, pieces, clash | vertex, r)
+        line = np.zeros(pieces.shape[0], dtype=np.bool_)
+        for t in range(pieces.shape[0]):
+            line[t] = k <= 3 and not vertex[t] and pieces[t, k - 1] != r + k
+        line_steps(lagrangian, gram, rows, grad, pieces, clash | ~line, steps)
+        bordered_steps(lagrangian, rows, grad, pieces, clash | vertex | line, r, steps)
     return steps
+
+
+@kernel
+def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndarray,
+               scale: np.ndarray, gap_lo: np.ndarray, gap_hi: np.ndarray,
+               limit: np.ndarray) -> np.ndarray:
+    """
+    Return the best of z = 0 and ``steps`` (K, C, k) on the model, each within the trust radius.
+
+    Its linear part z N must keep within the limits, and where the curvature term passes a
+    limit the joint is clipped to it: max_i scale_i |b_i + clip((z N + z^T Q z)_i)|, least
+    wins, z = 0 (judged first) on ties. ``steps`` are shortened to ``limit`` in place.
+    """
+    n_cand, k, m = null.shape
+    flat = quad.reshape(n_cand, k * k, m)
+    linear, pairs = np.empty(m), np.empty(k * k)
+    out = np.zeros((n_cand, k))
+    for i in range(n_cand):
+        best, usable = 0.0, True                # z = 0: usable where no joint is off limits
+        for j in range(m):
+            usable = usable and gap_lo[i, j] - SLACK <= 0.0 <= gap_hi[i, j] + SLACK
+            moved = np.abs(b[i, j] + min(max(0.0, gap_lo[i, j]), gap_hi[i, j])) * scale[j]
+            best = max(best, moved)
+        best, chosen = (best if usable else np.inf), -1
+        for t in range(steps.shape[1]):
+            size = 0.0
+            for a in range(k):
+                size += steps[i, t, a] * steps[i, t, a]
+            if size == 0.0:                     # z = 0 again: no better than the first
+                continue
+            if np.sqrt(size) > limit[i]:
+                shorten = np.divide(limit[i], max(np.sqrt(size), 1e-300))
+                for a in range(k):
+                    steps[i, t, a] *= shorten
+            usable = True
+            for j in range(m):
+                linear[j] = 0.0
+                for a in range(k):
+                    linear[j] += steps[i, t, a] * null[i, a, j]
+                usable = usable and gap_lo[i, j] - SLACK <= linear[j] <= gap_hi[i, j] + SLACK
+            if not usable:
+                continue
+            for a in range(k):
+                for c in range(k):
+                    pairs[a * k + c] = steps[i, t, a] * steps[i, t, c]
+            worst = 0.0
+            for j in range(m):
+                curve = 0.0                     # z^T Q_j z
+                for q in range(k * k):
+                    curve += pairs[q] * flat[i, q, j]
+                step = min(max(linear[j] + curve, gap_lo[i, j]), gap_hi[i, j])
+                worst = max(worst, np.abs(b[i, j] + step) * scale[j])
+            if worst < best:
+                best, chosen = worst, t
+        for a in range(k if chosen >= 0 else 0):
+            out[i, a] = steps[i, chosen, a]
+    return out
 
 
 @kernel
@@ -331,57 +467,8 @@ def minimax_step(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.nd
     largest displacements, ``active_pieces``) gives the SQP step of min t subject to those
     pieces = t (the limits reached), ``sqp_steps``. With k + 1 pieces that is a vertex of the
     linear model, whatever the Hessian. Every step is shortened to the trust radius and judged
-    on the model: its linear part z N must keep within the limits, and where the curvature
-    term passes a limit the joint is clipped to it, max_i scale_i |b_i + clip((z N +
-    z^T Q z)_i)|; the best, or z = 0 (judged first, so it wins ties), wins.
+    on the model; the best, or z = 0, wins (``best_steps``).
     """
-    n_cand, k, m = null.shape
     steps = sqp_steps(*active_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, vertex,
                       clashes, r)
-    flat = quad.reshape(n_cand, k * k, m)
-    linear, pairs = np.empty(m), np.empty(k * k)
-    out = np.zeros((n_cand, k))
-    for i in range(n_cand):
-        best, usable = 0.0, True                # z = 0: usable where no joint is off limits
-        for j in range(m):
-            usable = usable and gap_lo[i, j] - SLACK <= 0.0 <= gap_hi[i, j] + SLACK
-            best = max(best, np.abs(b[i, j] + min(max(0.0, gap_lo[i, j]), gap_hi[i, j]))
-                       * scale[j])
-        best, chosen = (best if usable else np.inf), -1
-        for t in range(pieces.shape[0]):
-            size = 0.0
-            for a in range(k):
-                size += steps[i, t, a] * steps[i, t, a]
-            if size == 0.0:                     # z = 0 again: no better than the first
-                continue
-            root = np.sqrt(size)                # shortened to the trust radius
-            if root > limit[i]:
-                shorten = np.divide(limit[i], max(root, 1e-300))
-                for a in range(k):
-                    steps[i, t, a] *= shorten
-            for j in range(m):
-                linear[j] = 0.0
-            for a in range(k):
-                for j in range(m):
-                    linear[j] += steps[i, t, a] * null[i, a, j]
-            usable = True
-            for j in range(m):
-                usable = usable and gap_lo[i, j] - SLACK <= linear[j] <= gap_hi[i, j] + SLACK
-            if not usable:
-                continue
-            for a in range(k):
-                for c in range(k):
-                    pairs[a * k + c] = steps[i, t, a] * steps[i, t, c]
-            worst = 0.0
-            for j in range(m):
-                curve = 0.0                     # z^T Q_j z
-                for q in range(k * k):
-                    curve += pairs[q] * flat[i, q, j]
-                step = min(max(linear[j] + curve, gap_lo[i, j]), gap_hi[i, j])
-                worst = max(worst, np.abs(b[i, j] + step) * scale[j])
-            if worst < best:
-                best, chosen = worst, t
-        if chosen >= 0:
-            for a in range(k):
-                out[i, a] = steps[i, chosen, a]
-    return out
+    return best_steps(steps, b, null, quad, scale, gap_lo, gap_hi, limit)

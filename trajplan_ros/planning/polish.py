@@ -28,8 +28,8 @@ x(z) = x + z N + z^T Q z of the solutions (Q from the second derivatives along e
 null directions): each candidate active set (the joints tying with the largest displacement,
 chosen among the k + 2 largest, with any of the k nearest joint limits) gives a step: a
 vertex set (k + 1 pieces) by its equations, a smaller one by its KKT system, both in closed
-form where they are small (up to 3x3: numpy's batched LAPACK calls cost more than the
-arithmetic at these sizes); the best on the model wins (``_active_set_minimax``). Near a
+form where they are small (up to 3x3), compiled (``active_set``); the best on the model wins
+(``_active_set_minimax``). Near a
 minimum that is
 Newton's method on the right active set: it converges in a few steps where a coordinate
 descent along the null directions stalls on the ridge where joints tie. Ties are then broken
