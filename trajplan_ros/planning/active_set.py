@@ -242,7 +242,8 @@ def lagrangian_hessians(hess: np.ndarray, dots: np.ndarray, pieces: np.ndarray,
     """
     n_cand, n_pieces, k = hess.shape[:3]
     n_sets, unused = pieces.shape[0], r + k
-    lagrangian, gram = np.zeros((n_cand, n_sets, k, k)), np.zeros((n_cand, n_sets, k, k))
+    lagrangian = np.empty((n_cand, n_sets, k, k))          # written where not skipped
+    gram = np.empty((n_cand, n_sets, k - 1, k - 1))
     m = np.empty((k, k))
     for i in range(n_cand):
         for t in range(n_sets):
@@ -264,13 +265,13 @@ def lagrangian_hessians(hess: np.ndarray, dots: np.ndarray, pieces: np.ndarray,
             tied = 0.0
             for s in range(k - 1):
                 tied += (1.0 if pieces[t, 1 + s] < r else 0.0) * m[s, k - 1]
-            for s in range(k):
-                weight = 1.0 - tied if s == 0 else m[s - 1, k - 1]
-                for a in range(k):
-                    for c in range(k):
-                        lagrangian[i, t, a, c] += weight * hess[i, pieces[t, s], a, c]
             for a in range(k):
-                lagrangian[i, t, a, a] += RIDGE
+                for c in range(k):
+                    total = 0.0
+                    for s in range(k):
+                        weight = 1.0 - tied if s == 0 else m[s - 1, k - 1]
+                        total += weight * hess[i, pieces[t, s], a, c]
+                    lagrangian[i, t, a, c] = total + (RIDGE if a == c else 0.0)
     return lagrangian, gram
 
 
@@ -407,8 +408,8 @@ def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndar
     wins, z = 0 (judged first) on ties. ``steps`` are shortened to ``limit`` in place.
     """
     n_cand, k, m = null.shape
-    flat = quad.reshape(n_cand, k * k, m)
-    linear, pairs = np.empty(m), np.empty(k * k)
+    across, curving = np.empty((m, k)), np.empty((m, k * k))    # N and Q by joint
+    pairs = np.empty(k * k)
     out = np.zeros((n_cand, k))
     for i in range(n_cand):
         best, usable = 0.0, True                # z = 0: usable where no joint is off limits
@@ -416,6 +417,10 @@ def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndar
             usable = usable and gap_lo[i, j] - SLACK <= 0.0 <= gap_hi[i, j] + SLACK
             moved = np.abs(b[i, j] + min(max(0.0, gap_lo[i, j]), gap_hi[i, j])) * scale[j]
             best = max(best, moved)
+            for a in range(k):
+                across[j, a] = null[i, a, j]
+                for c in range(k):
+                    curving[j, a * k + c] = quad[i, a, c, j]
         best, chosen = (best if usable else np.inf), -1
         for t in range(steps.shape[1]):
             size = 0.0
@@ -427,24 +432,22 @@ def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndar
                 shorten = np.divide(limit[i], max(np.sqrt(size), 1e-300))
                 for a in range(k):
                     steps[i, t, a] *= shorten
-            usable = True
-            for j in range(m):
-                linear[j] = 0.0
-                for a in range(k):
-                    linear[j] += steps[i, t, a] * null[i, a, j]
-                usable = usable and gap_lo[i, j] - SLACK <= linear[j] <= gap_hi[i, j] + SLACK
-            if not usable:
-                continue
             for a in range(k):
                 for c in range(k):
                     pairs[a * k + c] = steps[i, t, a] * steps[i, t, c]
             worst = 0.0
-            for j in range(m):
-                curve = 0.0                     # z^T Q_j z
+            for j in range(m):                  # until it is off limits or no better
+                linear, curve = 0.0, 0.0        # (z N)_j, (z^T Q z)_j
+                for a in range(k):
+                    linear += steps[i, t, a] * across[j, a]
+                if not gap_lo[i, j] - SLACK <= linear <= gap_hi[i, j] + SLACK:
+                    worst = np.inf
                 for q in range(k * k):
-                    curve += pairs[q] * flat[i, q, j]
-                step = min(max(linear[j] + curve, gap_lo[i, j]), gap_hi[i, j])
+                    curve += pairs[q] * curving[j, q]
+                step = min(max(linear + curve, gap_lo[i, j]), gap_hi[i, j])
                 worst = max(worst, np.abs(b[i, j] + step) * scale[j])
+                if worst >= best:
+                    break
             if worst < best:
                 best, chosen = worst, t
         for a in range(k if chosen >= 0 else 0):
