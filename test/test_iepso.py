@@ -186,7 +186,9 @@ def test_papers_iepso_alone_is_pinned_bit_for_bit():
     res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=3, polish=False, swarms=2, max_iter=60)
     assert [v.hex() for v in res.x] == ['0x1.ce0f32e3f43b7p-1', '0x1.d4eb9ede121ffp-1',
                                         '0x1.b1f70255d21d9p-1', '0x1.88cea0dad5ef4p+0']
-    assert res.fun.hex() == '0x1.a9fc668fb0885p+10'
+    # F re-recorded for the compiled rule base (single precision, summed in another order):
+    # 1703.94406 against 1703.94377 (2e-7 relative); the swarm's x is the same bit for bit
+    assert res.fun.hex() == '0x1.a9fc6b7eb9e44p+10'
     assert (res.nit, res.nfev, res.converged) == (60, 4880, False)
 
 
