@@ -313,9 +313,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f'machine: {platform.machine()}, {os.cpu_count()} CPUs, Python '
           f'{platform.python_version()}, {get_rmw_implementation_identifier()}')
     folder = tempfile.TemporaryDirectory(prefix='trajplan-bench-node-')
+    began = time.perf_counter()
     node = PlannerProcess(_description_args(args, folder.name), env=env)
     ros = RosClient('trajplan_bench')
     try:
+        ready = node.wait_for(r'\]: ready: ', TIMEOUT_S)
+        kernels = node.wait_for(r'\]: ((?:compiled|loaded) .*planning kernels in .*)$', 0.0)
+        print(f'start-up: service offered {time.perf_counter() - began:.2f} s after the start'
+              if ready else 'start-up: the node did not get ready',
+              f'({kernels.group(1)})' if kernels else '')
         met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
         print('\n'.join(service_lines[:5]))
         print(f'  plan() in this process on the same goals from the same starts: median '
