@@ -1,0 +1,392 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The polish's constraints linearised, and its exact line minimax along the solutions, compiled.
+
+``linearise`` linearises the constraints c(x) = 0 (reach, and the axis in radial mode: the
+residuals p - goal and the tool axis's components across the goal ray, ``Objective.residuals``)
+at K candidates x, from the forward kinematics' first and second derivatives. With J the
+Jacobian of c by the planned joints it returns:
+
+- c, the motion time R (eq. 10) and the merit omega R + travel weight sum |x - start| + W |c|;
+- the pseudo-inverse J^+ from the damped normal equations, J^T (J J^T + mu I)^-1 (or
+  (J^T J + mu I)^-1 J^T with more rows than joints), mu = 1e-12 trace: a few small products,
+  much cheaper than an SVD and well behaved near singularities;
+- a basis N of the null space of J: with one null direction the largest column of the
+  projector I - J^+ J, normalised; with more, the columns of a complete QR of J^T beyond its
+  rows (Householder reflections as LAPACK's dgeqrf and dorgqr take them);
+- Q (K, k, k, planned): half the second derivatives of the solutions along every pair of null
+  directions, Q_ab = -J^+ c''_ab / 2 with c''_ab = n_a^T (d2c/dq2) n_b: moving by z along the
+  null space, the solutions are x + z N + z^T Q z to second order.
+
+``line_searches`` moves candidates along each null direction in turn by ``line_minimax``: the
+exact minimiser over a line of the largest of the joints' displacements, each a parabola in the
+step z, ties going to the least total travel.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from trajplan_ros.kinematics.jit import kernel
+
+__all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps']
+
+
+@kernel
+def invert_symmetric(m: np.ndarray) -> np.ndarray:
+    """
+    Return the inverse of a symmetric positive definite matrix m (s, s).
+
+    The adjugate for s = 3 (the position constraints), else Gauss-Jordan elimination with
+    partial pivoting.
+    """
+    s = m.shape[0]
+    out = np.empty((s, s))
+    if s == 3:
+        a, b, c, d, e, f = m[0, 0], m[0, 1], m[0, 2], m[1, 1], m[1, 2], m[2, 2]
+        cof = (d * f - e * e, c * e - b * f, b * e - c * d,
+               a * f - c * c, b * c - a * e, a * d - b * b)
+        inv_det = np.divide(1.0, a * cof[0] + b * cof[1] + c * cof[2])
+        out[0, 0] = cof[0] * inv_det
+        out[0, 1] = out[1, 0] = cof[1] * inv_det
+        out[0, 2] = out[2, 0] = cof[2] * inv_det
+        out[1, 1] = cof[3] * inv_det
+        out[1, 2] = out[2, 1] = cof[4] * inv_det
+        out[2, 2] = cof[5] * inv_det
+        return out
+    work = m.copy()
+    out[:] = 0.0
+    for i in range(s):
+        out[i, i] = 1.0
+    for col in range(s):
+        pivot = col
+        for r in range(col + 1, s):
+            if abs(work[r, col]) > abs(work[pivot, col]):
+                pivot = r
+        if pivot != col:
+            for j in range(s):
+                work[col, j], work[pivot, j] = work[pivot, j], work[col, j]
+                out[col, j], out[pivot, j] = out[pivot, j], out[col, j]
+        scale = np.divide(1.0, work[col, col])
+        for j in range(s):
+            work[col, j] *= scale
+            out[col, j] *= scale
+        for r in range(s):
+            if r != col and work[r, col] != 0.0:
+                f = work[r, col]
+                for j in range(s):
+                    work[r, j] -= f * work[col, j]
+                    out[r, j] -= f * out[col, j]
+    return out
+
+
+@kernel
+def complete_null_basis(a: np.ndarray) -> np.ndarray:
+    """
+    Return the columns of the complete QR of a (m, r), m > r, beyond r, as rows (m - r, m).
+
+    Householder reflections H_i = I - tau v v^T as LAPACK's dgeqr2 (dlarfg: beta = -sign(alpha)
+    |x|) and dorg2r take them: the columns are H_0 ... H_{r-1} e_j, j >= r.
+    """
+    m, r = a.shape
+    work = a.copy()
+    tau = np.zeros(r)
+    for i in range(r):
+        alpha = work[i, i]
+        xnorm = 0.0
+        for t in range(i + 1, m):
+            xnorm += work[t, i] * work[t, i]
+        xnorm = np.sqrt(xnorm)
+        if xnorm == 0.0:
+            continue
+        big, small = max(abs(alpha), xnorm), min(abs(alpha), xnorm)
+        beta = -np.copysign(big * np.sqrt(1.0 + (small / big) ** 2), alpha)
+        tau[i] = (beta - alpha) / beta
+        shrink = 1.0 / (alpha - beta)
+        for t in range(i + 1, m):
+            work[t, i] *= shrink
+        work[i, i] = 1.0                       # v = (1, work[i + 1:, i])
+        for j in range(i + 1, r):              # the columns after i: C <- C - tau v (v^T C)
+            w = 0.0
+            for t in range(i, m):
+                w += work[t, i] * work[t, j]
+            w *= tau[i]
+            for t in range(i, m):
+                work[t, j] -= w * work[t, i]
+        work[i, i] = beta
+    out = np.zeros((m - r, m))
+    for j in range(r, m):
+        q = out[j - r]
+        q[j] = 1.0
+        for i in range(r - 1, -1, -1):
+            if tau[i] == 0.0:
+                continue
+            w = q[i]
+            for t in range(i + 1, m):
+                w += work[t, i] * q[t]
+            w *= tau[i]
+            q[i] -= w
+            for t in range(i + 1, m):
+                q[t] -= w * work[t, i]
+    return out
+
+
+@kernel
+def linearise(tool: np.ndarray, columns: np.ndarray, hessian: np.ndarray, x: np.ndarray,
+              start: np.ndarray, scale: np.ndarray, omega: float, goal: np.ndarray,
+              across: np.ndarray, travel_weight: float, weight: float, free: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray]:
+    """
+    Return c, R, the merit, J^+, N and Q at candidates x (K, planned) (see the module).
+
+    ``tool`` (3, 2, K), ``columns`` (3, planned, 3, K) and ``hessian`` (K, planned, planned,
+    2, 3) as ``ToolJacobian`` gives them (the Hessian only with null directions); ``start``,
+    ``scale`` (omega / omega_i): per planned joint; ``across`` (h, 3): the components of the
+    tool axis held (h = 0 in free mode); ``travel_weight`` and ``weight`` (W): the merit's
+    weights of the travel and of |c|; ``free``: the null directions
+    wanted (0, or the planned joints less the 3 + h residuals). Returns c (K, 3 + h), R (K,),
+    merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned), Q (K, free, free, planned).
+    """
+    count, dim = x.shape
+    held = across.shape[0]
+    rows = 3 + held
+    size = min(rows, dim)
+    c = np.empty((count, rows))
+    time = np.empty(count)
+    merit = np.empty(count)
+    pinv = np.empty((count, dim, rows))
+    null = np.zeros((count, free, dim))
+    quad = np.zeros((count, free, free, dim))
+    jac = np.empty((rows, dim))
+    gram = np.empty((size, size))
+    turn = np.empty((free, dim, 2, 3))           # the Hessian times each null direction
+    second = np.empty(rows)
+    for k in range(count):
+        # the residuals and the merit
+        for a in range(3):
+            c[k, a] = tool[a, 0, k] - goal[a]
+        for h in range(held):
+            c[k, 3 + h] = (across[h, 0] * tool[0, 1, k] + across[h, 1] * tool[1, 1, k]
+                           + across[h, 2] * tool[2, 1, k])
+        largest, travel = 0.0, 0.0
+        for i in range(dim):
+            moved = abs(x[k, i] - start[i])
+            largest = max(largest, moved * scale[i])
+            travel += moved
+        time[k] = largest / omega
+        norm = 0.0
+        for a in range(rows):
+            norm += c[k, a] * c[k, a]
+        merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
+        # the Jacobian of the residuals and its damped pseudo-inverse
+        for i in range(dim):
+            for a in range(3):
+                jac[a, i] = columns[a, i, 0, k]
+            for h in range(held):
+                jac[3 + h, i] = (across[h, 0] * columns[0, i, 1, k]
+                                 + across[h, 1] * columns[1, i, 1, k]
+                                 + across[h, 2] * columns[2, i, 1, k])
+        wide = rows <= dim                       # J J^T, else J^T J
+        trace = 0.0
+        for a in range(size):
+            for b in range(a, size):
+                total = 0.0
+                if wide:
+                    for i in range(dim):
+                        total += jac[a, i] * jac[b, i]
+                else:
+                    for r in range(rows):
+                        total += jac[r, a] * jac[r, b]
+                gram[a, b] = gram[b, a] = total
+            trace += gram[a, a]
+        damp = 1e-12 * trace + 1e-300
+        for a in range(size):
+            gram[a, a] += damp
+        inverse = invert_symmetric(gram)
+        for i in range(dim):
+            for r in range(rows):
+                total = 0.0
+                if wide:                         # J^T (J J^T + mu I)^-1
+                    for s in range(rows):
+                        total += jac[s, i] * inverse[s, r]
+                else:                            # (J^T J + mu I)^-1 J^T
+                    for s in range(dim):
+                        total += inverse[i, s] * jac[r, s]
+                pinv[k, i, r] = total
+        if free == 0:
+            continue
+        # the null space: the projector's largest column, or a complete QR of J^T
+        if free == 1:
+            best, best_size = 0, -1.0
+            for j in range(dim):
+                col_size = 0.0
+                for i in range(dim):
+                    entry = (1.0 if i == j else 0.0)
+                    for r in range(rows):
+                        entry -= pinv[k, i, r] * jac[r, j]
+                    col_size += entry * entry
+                if col_size > best_size:
+                    best, best_size = j, col_size
+            length = np.sqrt(best_size)
+            for i in range(dim):
+                entry = (1.0 if i == best else 0.0)
+                for r in range(rows):
+                    entry -= pinv[k, i, r] * jac[r, best]
+                null[k, 0, i] = np.divide(entry, length)
+        else:
+            null[k] = complete_null_basis(jac.T.copy())
+        # half the second derivatives of the solutions: -J^+ n_a^T (d2c/dq2) n_b / 2
+        for b in range(free):
+            for i in range(dim):
+                for t in range(2):
+                    for e in range(3):
+                        total = 0.0
+                        for j in range(dim):
+                            total += hessian[k, i, j, t, e] * null[k, b, j]
+                        turn[b, i, t, e] = total
+        for a in range(free):
+            for b in range(a, free):
+                for e in range(3):
+                    total = 0.0
+                    for i in range(dim):
+                        total += null[k, a, i] * turn[b, i, 0, e]
+                    second[e] = total
+                for h in range(held):
+                    total = 0.0
+                    for e in range(3):
+                        du = 0.0
+                        for i in range(dim):
+                            du += null[k, a, i] * turn[b, i, 1, e]
+                        total += across[h, e] * du
+                    second[3 + h] = total
+                for i in range(dim):
+                    total = 0.0
+                    for r in range(rows):
+                        total += pinv[k, i, r] * second[r]
+                    quad[k, a, b, i] = quad[k, b, a, i] = -0.5 * total
+    return c, time, merit, pinv, null, quad
+
+
+@kernel
+def minimum_norm_steps(pinv: np.ndarray, res: np.ndarray) -> np.ndarray:
+    """Return the Newton steps -J^+ res (K, planned) for residuals res (K, rows)."""
+    count, dim, rows = pinv.shape
+    out = np.empty((count, dim))
+    for k in range(count):
+        for i in range(dim):
+            total = 0.0
+            for r in range(rows):
+                total += pinv[k, i, r] * res[k, r]
+            out[k, i] = -total
+    return out
+
+
+@kernel
+def parabola_roots(qa: float, qb: float, qc: float) -> tuple[float, float]:
+    """
+    Return the real roots of qa z^2 + qb z + qc = 0, stably; NaN, inf where there are none.
+
+    One root (the other NaN) where qa is negligible beside qb.
+    """
+    if abs(qa) <= 1e-14 * (abs(qb) + 1e-300):
+        return np.divide(-qc, qb), np.nan
+    q = -0.5 * (qb + np.copysign(np.sqrt(qb * qb - 4.0 * qa * qc), qb))
+    return q / qa, np.divide(qc, q)
+
+
+@kernel
+def line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: float, zhi: float,
+                 tie: float) -> float:
+    """
+    Return the z in [zlo, zhi] that minimises max_i |b_i + n_i z + a_i z^2|.
+
+    Every candidate point is tried: where two |parabolas| are equal (q_i - q_j or q_i + q_j is
+    zero), the zeros and stationary points of each, the least total travel (sum_i |q_i| with
+    the signs at z = 0), the bounds and 0. Ties (within ``tie``) go to the least total travel,
+    then to the first candidate. b, n, a: (m,).
+    """
+    m = b.shape[0]
+    pairs = m * (m - 1) // 2
+    quadratics = 2 * pairs + m
+    cand = np.empty(2 * quadratics + m + 4)
+    # the quadratics in the order: q_i - q_j, q_i + q_j (pairs i < j), q_i; first roots first
+    at = 0
+    for plus in range(2):
+        sign = 1.0 if plus else -1.0
+        for i in range(m):
+            for j in range(i + 1, m):
+                first, second = parabola_roots(a[i] + sign * a[j], n[i] + sign * n[j],
+                                               b[i] + sign * b[j])
+                cand[at], cand[quadratics + at] = first, second
+                at += 1
+    for i in range(m):
+        cand[at], cand[quadratics + at] = parabola_roots(a[i], n[i], b[i])
+        at += 1
+    at = 2 * quadratics
+    slope, bend = 0.0, 0.0
+    for i in range(m):
+        cand[at + i] = np.divide(-n[i], 2.0 * a[i])         # stationary points
+        side = np.sign(b[i]) if b[i] != 0.0 else np.sign(n[i])
+        slope += side * n[i]
+        bend += side * a[i]
+    at += m
+    cand[at] = np.divide(-slope, 2.0 * bend)                # least total travel
+    cand[at + 1], cand[at + 2], cand[at + 3] = zlo, zhi, 0.0
+    worst = np.empty(cand.shape[0])
+    total = np.empty(cand.shape[0])
+    least = np.inf
+    for s in range(cand.shape[0]):
+        z = cand[s] if np.isfinite(cand[s]) else 0.0
+        z = min(max(z, zlo), zhi)
+        cand[s] = z
+        high, sum_ = 0.0, 0.0
+        for i in range(m):
+            d = abs(b[i] + (n[i] + a[i] * z) * z)
+            high = max(high, d)
+            sum_ += d
+        worst[s], total[s] = high, sum_
+        least = min(least, high)
+    pick, pick_total = 0, np.inf
+    for s in range(cand.shape[0]):
+        if worst[s] <= least + tie and total[s] < pick_total:
+            pick, pick_total = s, total[s]
+    return cand[pick]
+
+
+@kernel
+def line_searches(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.ndarray,
+                  scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, radius: np.ndarray,
+                  tie: float) -> np.ndarray:
+    """
+    Return ``base`` (K, m) moved by ``line_minimax`` along each null direction in turn.
+
+    Along direction n (``null`` (K, k, m)) with half the curvature a (the diagonal of ``quad``)
+    the joints move by (n + a z) z; the step z keeps the linear part within [lo, hi] and |z|
+    within ``radius`` (K,), and minimises the largest scaled displacement from ``start``
+    (``scale``: omega / omega_i), ties within ``tie`` going to the least total travel.
+    """
+    count, free, m = null.shape
+    out = base.copy()
+    b = np.empty(m)
+    n = np.empty(m)
+    a = np.empty(m)
+    for k in range(count):
+        x = out[k]
+        for j in range(free):
+            zlo, zhi = -radius[k], radius[k]
+            for i in range(m):
+                step = null[k, j, i]
+                if abs(step) > 1e-15:           # the joint limits along z
+                    to_lo, to_hi = (lo[i] - x[i]) / step, (hi[i] - x[i]) / step
+                    zlo = max(zlo, min(to_lo, to_hi))
+                    zhi = min(zhi, max(to_lo, to_hi))
+            zhi = max(zhi, zlo)
+            for i in range(m):
+                b[i] = (x[i] - start[i]) * scale[i]
+                n[i] = null[k, j, i] * scale[i]
+                a[i] = quad[k, j, j, i] * scale[i]
+            z = line_minimax(b, n, a, zlo, zhi, tie)
+            for i in range(m):
+                x[i] = x[i] + (null[k, j, i] + quad[k, j, j, i] * z) * z
+    return out
