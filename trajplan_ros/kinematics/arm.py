@@ -43,33 +43,31 @@ class ToolJacobian:
     Per planned joint i: dp/dq_i = Z_i x (p - o_i), du/dq_i = Z_i x u and the signed joint axis
     Z_i (axis of joint i times its sign).
 
-    ``tool`` is (3, 2, N): x, y, z of p and u. ``columns`` is (3, planned, 3, N): x, y, z of
-    [i, 0] = dp/dq_i, [i, 1] = du/dq_i and [i, 2] = Z_i (coordinates first, for fast
-    arithmetic).
+    ``rows`` is (2 + 3 planned, N, 3) as ``forward.walk_chain`` gives them: p, u, then per
+    planned joint i dp/dq_i, du/dq_i and Z_i at rows 2 + 3i, 3 + 3i and 4 + 3i.
     """
 
-    tool: np.ndarray
-    columns: np.ndarray
+    rows: np.ndarray
 
     @property
     def p(self) -> np.ndarray:
         """Tool position, (N, 3)."""
-        return self.tool[:, 0].T
+        return self.rows[0]
 
     @property
     def u(self) -> np.ndarray:
         """Tool axis, (N, 3)."""
-        return self.tool[:, 1].T
+        return self.rows[1]
 
     @property
     def jp(self) -> np.ndarray:
         """dp/dq, (N, 3, planned)."""
-        return self.columns[:, :, 0].transpose(2, 0, 1)
+        return self.rows[2::3].transpose(1, 2, 0)
 
     @property
     def ju(self) -> np.ndarray:
         """du/dq, (N, 3, planned)."""
-        return self.columns[:, :, 1].transpose(2, 0, 1)
+        return self.rows[3::3].transpose(1, 2, 0)
 
     def hessian(self) -> np.ndarray:
         """
@@ -79,7 +77,7 @@ class ToolJacobian:
         (``forward.chain_hessian``, compiled). Along joint directions n the second derivative
         d2/dt2 p(q + t n) is n^T H n.
         """
-        return chain_hessian(self.columns)
+        return chain_hessian(self.rows)
 
 
 def _rot_x(angle: float) -> np.ndarray:
@@ -422,11 +420,7 @@ class ArmModel:
 
         ``tail`` as for ``tool``.
         """
-        vec = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
-        vec = np.moveaxis(vec, 2, 0)                               # (3, 2 + 3 planned, N)
-        # each contiguous: the compiled kernels that take them compile one signature
-        return ToolJacobian(np.ascontiguousarray(vec[:, :2]),
-                            np.ascontiguousarray(vec[:, 2:]).reshape(3, self.planned, 3, -1))
+        return ToolJacobian(self._walk(np.asarray(q, dtype=float), tail, jacobian=True))
 
     def _walk(self, q: np.ndarray, tail: np.ndarray | None, jacobian: bool) -> np.ndarray:
         if tail is None:

@@ -84,22 +84,24 @@ def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: n
 
 
 @kernel
-def chain_hessian(columns: np.ndarray) -> np.ndarray:
+def chain_hessian(rows: np.ndarray) -> np.ndarray:
     """
     Return the second derivatives of the tool point p and axis u by every pair of joints.
 
-    ``columns`` (3, planned, 3, N): x, y, z of dp/dq_i, du/dq_i and the signed joint axis Z_i
-    (``ToolJacobian.columns``). Returns (N, planned, planned, 2, 3): [k, i, j, 0] = d2p/dq_i dq_j
-    and [k, i, j, 1] = d2u/dq_i dq_j, both Z_i x (dp/dq_j, du/dq_j) for i <= j, symmetric.
+    ``rows`` (2 + 3 planned, N, 3): ``walk_chain``'s with the Jacobian (dp/dq_i, du/dq_i and
+    the signed joint axis Z_i at rows 2 + 3i, 3 + 3i, 4 + 3i). Returns (N, planned, planned, 2,
+    3): [k, i, j, 0] = d2p/dq_i dq_j and [k, i, j, 1] = d2u/dq_i dq_j, both Z_i x (dp/dq_j,
+    du/dq_j) for i <= j, symmetric.
     """
-    planned, n = columns.shape[1], columns.shape[3]
+    planned, n = (rows.shape[0] - 2) // 3, rows.shape[1]
     out = np.empty((n, planned, planned, 2, 3))
     for k in range(n):
         for i in range(planned):
-            zx, zy, zz = columns[0, i, 2, k], columns[1, i, 2, k], columns[2, i, 2, k]
+            zx, zy, zz = rows[4 + 3 * i, k, 0], rows[4 + 3 * i, k, 1], rows[4 + 3 * i, k, 2]
             for j in range(i, planned):
                 for t in range(2):
-                    x, y, z = columns[0, j, t, k], columns[1, j, t, k], columns[2, j, t, k]
+                    x, y, z = rows[2 + 3 * j + t, k, 0], rows[2 + 3 * j + t, k, 1], \
+                        rows[2 + 3 * j + t, k, 2]
                     out[k, i, j, t, 0] = out[k, j, i, t, 0] = zy * z - zz * y
                     out[k, i, j, t, 1] = out[k, j, i, t, 1] = zz * x - zx * z
                     out[k, i, j, t, 2] = out[k, j, i, t, 2] = zx * y - zy * x

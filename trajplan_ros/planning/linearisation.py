@@ -132,21 +132,22 @@ def complete_null_basis(a: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def linearise(tool: np.ndarray, columns: np.ndarray, hessian: np.ndarray, x: np.ndarray,
-              start: np.ndarray, scale: np.ndarray, omega: float, goal: np.ndarray,
-              across: np.ndarray, travel_weight: float, weight: float, free: int
+def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
+              scale: np.ndarray, omega: float, goal: np.ndarray, across: np.ndarray,
+              travel_weight: float, weight: float, free: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          np.ndarray]:
     """
     Return c, R, the merit, J^+, N and Q at candidates x (K, planned) (see the module).
 
-    ``tool`` (3, 2, K), ``columns`` (3, planned, 3, K) and ``hessian`` (K, planned, planned,
-    2, 3) as ``ToolJacobian`` gives them (the Hessian only with null directions); ``start``,
-    ``scale`` (omega / omega_i): per planned joint; ``across`` (h, 3): the components of the
-    tool axis held (h = 0 in free mode); ``travel_weight`` and ``weight`` (W): the merit's
-    weights of the travel and of |c|; ``free``: the null directions
-    wanted (0, or the planned joints less the 3 + h residuals). Returns c (K, 3 + h), R (K,),
-    merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned), Q (K, free, free, planned).
+    ``walk`` (2 + 3 planned, K, 3): p, u and per joint dp/dq_i, du/dq_i, Z_i, and ``hessian``
+    (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
+    directions); ``start`` and ``scale`` (omega / omega_i): per planned joint; ``across`` (h,
+    3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
+    ``weight`` (W): the merit's weights of the travel and of |c|; ``free``: the null
+    directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
+    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned) and Q (K, free,
+    free, planned).
     """
     count, dim = x.shape
     held = across.shape[0]
@@ -165,10 +166,10 @@ def linearise(tool: np.ndarray, columns: np.ndarray, hessian: np.ndarray, x: np.
     for k in range(count):
         # the residuals and the merit
         for a in range(3):
-            c[k, a] = tool[a, 0, k] - goal[a]
+            c[k, a] = walk[0, k, a] - goal[a]
         for h in range(held):
-            c[k, 3 + h] = (across[h, 0] * tool[0, 1, k] + across[h, 1] * tool[1, 1, k]
-                           + across[h, 2] * tool[2, 1, k])
+            c[k, 3 + h] = (across[h, 0] * walk[1, k, 0] + across[h, 1] * walk[1, k, 1]
+                           + across[h, 2] * walk[1, k, 2])
         largest, travel = 0.0, 0.0
         for i in range(dim):
             moved = abs(x[k, i] - start[i])
@@ -182,11 +183,11 @@ def linearise(tool: np.ndarray, columns: np.ndarray, hessian: np.ndarray, x: np.
         # the Jacobian of the residuals and its damped pseudo-inverse
         for i in range(dim):
             for a in range(3):
-                jac[a, i] = columns[a, i, 0, k]
+                jac[a, i] = walk[2 + 3 * i, k, a]
             for h in range(held):
-                jac[3 + h, i] = (across[h, 0] * columns[0, i, 1, k]
-                                 + across[h, 1] * columns[1, i, 1, k]
-                                 + across[h, 2] * columns[2, i, 1, k])
+                jac[3 + h, i] = (across[h, 0] * walk[3 + 3 * i, k, 0]
+                                 + across[h, 1] * walk[3 + 3 * i, k, 1]
+                                 + across[h, 2] * walk[3 + 3 * i, k, 2])
         wide = rows <= dim                       # J J^T, else J^T J
         trace = 0.0
         for a in range(size):
@@ -269,16 +270,26 @@ def linearise(tool: np.ndarray, columns: np.ndarray, hessian: np.ndarray, x: np.
 
 
 @kernel
-def minimum_norm_steps(pinv: np.ndarray, res: np.ndarray) -> np.ndarray:
-    """Return the Newton steps -J^+ res (K, planned) for residuals res (K, rows)."""
+def minimum_norm_steps(pinv: np.ndarray, res: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """
+    Return the Newton steps -J^+ res (K, planned) for residuals res (K, rows).
+
+    Each step is shortened to at most its ``radius`` (K,; inf: as it is).
+    """
     count, dim, rows = pinv.shape
     out = np.empty((count, dim))
     for k in range(count):
+        size = 0.0
         for i in range(dim):
             total = 0.0
             for r in range(rows):
                 total += pinv[k, i, r] * res[k, r]
             out[k, i] = -total
+            size += total * total
+        shrink = min(1.0, radius[k] / max(np.sqrt(size), 1e-300))
+        if shrink < 1.0:
+            for i in range(dim):
+                out[k, i] *= shrink
     return out
 
 

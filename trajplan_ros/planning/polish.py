@@ -352,22 +352,30 @@ class Linearisation:
         free = 0 if newton_only else max(planned - 3 - len(across), 0)
         hessian = d.hessian() if free else np.empty((0, planned, planned, 2, 3))
         self.c, self.time, self.merit, self.pinv, self.null, self.quad = linearise(
-            d.tool, d.columns, hessian, x, np.ascontiguousarray(obj.planned_start),
-            np.ascontiguousarray(obj.time_scale), obj.omega, obj.goal,
+            d.rows, hessian, x, np.ascontiguousarray(obj.planned_start),
+            np.ascontiguousarray(obj.time_scale), obj.omega, np.ascontiguousarray(obj.goal),
             np.ascontiguousarray(across), _TRAVEL_WEIGHT, float(weight), free)
         self.error = obj.errors(d.p, d.u)
 
-    def newton(self, res: np.ndarray) -> np.ndarray:
-        """Minimum-norm steps dx (K, planned): J dx = -res (least squares off its range)."""
-        return minimum_norm_steps(self.pinv, np.ascontiguousarray(res, dtype=float))
+    def newton(self, res: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
+        """
+        Return minimum-norm steps dx (K, planned): J dx = -res (least squares off its range).
+
+        With ``radius`` (K,), each shortened to at most its radius.
+        """
+        if radius is None:
+            radius = np.full(len(self.pinv), np.inf)
+        return minimum_norm_steps(self.pinv, np.ascontiguousarray(res, dtype=float),
+                                  np.ascontiguousarray(radius, dtype=float))
 
     _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
 
     def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
         for name in self._FIELDS:
-            mine, theirs = getattr(self, name), getattr(other, name)
-            mine[mask] = theirs[mask]
+            mine = getattr(self, name)
+            np.copyto(mine, getattr(other, name),
+                      where=mask.reshape(mask.shape + (1,) * (mine.ndim - 1)))
 
     def take(self, mask: np.ndarray) -> None:
         """Keep only the candidates where mask is true."""
@@ -417,7 +425,7 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
     """
     lo, hi, scale = obj.lower, obj.upper, obj.time_scale
     start = obj.planned_start
-    base = x + _within(here.newton(here.c), radius)
+    base = x + here.newton(here.c, radius)
     if wide:
         base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius,
                           vertex_only)
@@ -425,7 +433,7 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
         base = _line_searches(here, base, start, scale, lo, hi, radius)
     trial = np.clip(base, lo, hi)
     for _ in range(_CHORD_STEPS if wide else 1):
-        trial = np.clip(trial + _within(here.newton(_residuals(obj, trial)), radius), lo, hi)
+        trial = np.clip(trial + here.newton(_residuals(obj, trial), radius), lo, hi)
     return trial
 
 
