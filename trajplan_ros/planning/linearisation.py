@@ -33,15 +33,14 @@ __all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps']
 
 
 @kernel
-def invert_symmetric(m: np.ndarray) -> np.ndarray:
+def invert_symmetric(m: np.ndarray, out: np.ndarray) -> None:
     """
-    Return the inverse of a symmetric positive definite matrix m (s, s).
+    Put the inverse of a symmetric positive definite matrix m (s, s) into ``out`` (s, s).
 
     The adjugate for s = 3 (the position constraints), else Gauss-Jordan elimination with
-    partial pivoting.
+    partial pivoting (which overwrites m).
     """
     s = m.shape[0]
-    out = np.empty((s, s))
     if s == 3:
         a, b, c, d, e, f = m[0, 0], m[0, 1], m[0, 2], m[1, 1], m[1, 2], m[2, 2]
         cof = (d * f - e * e, c * e - b * f, b * e - c * d,
@@ -53,49 +52,47 @@ def invert_symmetric(m: np.ndarray) -> np.ndarray:
         out[1, 1] = cof[3] * inv_det
         out[1, 2] = out[2, 1] = cof[4] * inv_det
         out[2, 2] = cof[5] * inv_det
-        return out
-    work = m.copy()
+        return
     out[:] = 0.0
     for i in range(s):
         out[i, i] = 1.0
     for col in range(s):
         pivot = col
         for r in range(col + 1, s):
-            if abs(work[r, col]) > abs(work[pivot, col]):
+            if abs(m[r, col]) > abs(m[pivot, col]):
                 pivot = r
         if pivot != col:
             for j in range(s):
-                work[col, j], work[pivot, j] = work[pivot, j], work[col, j]
+                m[col, j], m[pivot, j] = m[pivot, j], m[col, j]
                 out[col, j], out[pivot, j] = out[pivot, j], out[col, j]
-        scale = np.divide(1.0, work[col, col])
+        scale = np.divide(1.0, m[col, col])
         for j in range(s):
-            work[col, j] *= scale
+            m[col, j] *= scale
             out[col, j] *= scale
         for r in range(s):
-            if r != col and work[r, col] != 0.0:
-                f = work[r, col]
+            if r != col and m[r, col] != 0.0:
+                f = m[r, col]
                 for j in range(s):
-                    work[r, j] -= f * work[col, j]
+                    m[r, j] -= f * m[col, j]
                     out[r, j] -= f * out[col, j]
-    return out
 
 
 @kernel
-def complete_null_basis(a: np.ndarray) -> np.ndarray:
+def complete_null_basis(a: np.ndarray, tau: np.ndarray, out: np.ndarray) -> None:
     """
-    Return the columns of the complete QR of a (m, r), m > r, beyond r, as rows (m - r, m).
+    Put the columns of the complete QR of a (m, r), m > r, beyond r into ``out`` (m - r, m).
 
-    Householder reflections H_i = I - tau v v^T as LAPACK's dgeqr2 (dlarfg: beta = -sign(alpha)
-    |x|) and dorg2r take them: the columns are H_0 ... H_{r-1} e_j, j >= r.
+    Householder reflections H_i = I - tau_i v_i v_i^T as LAPACK's dgeqr2 (dlarfg: beta =
+    -sign(alpha) |x|) and dorg2r take them: the columns are H_0 ... H_{r-1} e_j, j >= r. ``a``
+    is overwritten by the reflectors, ``tau`` (r,) by their weights.
     """
     m, r = a.shape
-    work = a.copy()
-    tau = np.zeros(r)
     for i in range(r):
-        alpha = work[i, i]
+        tau[i] = 0.0
+        alpha = a[i, i]
         xnorm = 0.0
         for t in range(i + 1, m):
-            xnorm += work[t, i] * work[t, i]
+            xnorm += a[t, i] * a[t, i]
         xnorm = np.sqrt(xnorm)
         if xnorm == 0.0:
             continue
@@ -104,31 +101,30 @@ def complete_null_basis(a: np.ndarray) -> np.ndarray:
         tau[i] = (beta - alpha) / beta
         shrink = 1.0 / (alpha - beta)
         for t in range(i + 1, m):
-            work[t, i] *= shrink
-        work[i, i] = 1.0                       # v = (1, work[i + 1:, i])
+            a[t, i] *= shrink
+        a[i, i] = 1.0                          # v = (1, a[i + 1:, i])
         for j in range(i + 1, r):              # the columns after i: C <- C - tau v (v^T C)
             w = 0.0
             for t in range(i, m):
-                w += work[t, i] * work[t, j]
+                w += a[t, i] * a[t, j]
             w *= tau[i]
             for t in range(i, m):
-                work[t, j] -= w * work[t, i]
-        work[i, i] = beta
-    out = np.zeros((m - r, m))
+                a[t, j] -= w * a[t, i]
+        a[i, i] = beta
     for j in range(r, m):
         q = out[j - r]
+        q[:] = 0.0
         q[j] = 1.0
         for i in range(r - 1, -1, -1):
             if tau[i] == 0.0:
                 continue
             w = q[i]
             for t in range(i + 1, m):
-                w += work[t, i] * q[t]
+                w += a[t, i] * q[t]
             w *= tau[i]
             q[i] -= w
             for t in range(i + 1, m):
-                q[t] -= w * work[t, i]
-    return out
+                q[t] -= w * a[t, i]
 
 
 @kernel
@@ -161,7 +157,10 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
     quad = np.zeros((count, free, free, dim))
     jac = np.empty((rows, dim))
     gram = np.empty((size, size))
+    inverse = np.empty((size, size))
     turn = np.empty((free, dim, 2, 3))           # the Hessian times each null direction
+    reflectors = np.empty((dim, rows))            # J^T, then its Householder reflectors
+    tau = np.empty(rows)
     second = np.empty(rows)
     for k in range(count):
         # the residuals and the merit
@@ -204,7 +203,7 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
         damp = 1e-12 * trace + 1e-300
         for a in range(size):
             gram[a, a] += damp
-        inverse = invert_symmetric(gram)
+        invert_symmetric(gram, inverse)
         for i in range(dim):
             for r in range(rows):
                 total = 0.0
@@ -236,16 +235,19 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
                     entry -= pinv[k, i, r] * jac[r, best]
                 null[k, 0, i] = np.divide(entry, length)
         else:
-            null[k] = complete_null_basis(jac.T.copy())
+            for i in range(dim):
+                for r in range(rows):
+                    reflectors[i, r] = jac[r, i]
+            complete_null_basis(reflectors, tau, null[k])
         # half the second derivatives of the solutions: -J^+ n_a^T (d2c/dq2) n_b / 2
+        turn[:] = 0.0
         for b in range(free):
             for i in range(dim):
-                for t in range(2):
-                    for e in range(3):
-                        total = 0.0
-                        for j in range(dim):
-                            total += hessian[k, i, j, t, e] * null[k, b, j]
-                        turn[b, i, t, e] = total
+                for j in range(dim):
+                    weight_j = null[k, b, j]
+                    for t in range(2):
+                        for e in range(3):
+                            turn[b, i, t, e] += hessian[k, i, j, t, e] * weight_j
         for a in range(free):
             for b in range(a, free):
                 for e in range(3):
