@@ -128,76 +128,56 @@ def complete_null_basis(a: np.ndarray, tau: np.ndarray, out: np.ndarray) -> None
 
 
 @kernel
-def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
-              scale: np.ndarray, omega: float, goal: np.ndarray, across: np.ndarray,
-              travel_weight: float, weight: float, free: int
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray]:
+def residuals_and_jacobians(walk: np.ndarray, goal: np.ndarray, across: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
     """
-    Return c, R, the merit, J^+, N and Q at candidates x (K, planned) (see the module).
+    Return the residuals c (K, 3 + h) and their Jacobians J (K, 3 + h, planned).
 
-    ``walk`` (2 + 3 planned, K, 3): p, u and per joint dp/dq_i, du/dq_i, Z_i, and ``hessian``
-    (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
-    directions); ``start`` and ``scale`` (omega / omega_i): per planned joint; ``across`` (h,
-    3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
-    ``weight`` (W): the merit's weights of the travel and of |c|; ``free``: the null
-    directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
-    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned) and Q (K, free,
-    free, planned).
+    The residuals p - goal and the components of u along the rows of ``across`` (h, 3); the
+    Jacobian's columns dp/dq_i and ``across`` du/dq_i, from ``walk`` (see ``linearise``).
     """
-    count, dim = x.shape
-    held = across.shape[0]
-    rows = 3 + held
-    size = min(rows, dim)
-    c = np.empty((count, rows))
-    time = np.empty(count)
-    merit = np.empty(count)
-    pinv = np.empty((count, dim, rows))
-    null = np.zeros((count, free, dim))
-    quad = np.zeros((count, free, free, dim))
-    jac = np.empty((rows, dim))
-    gram = np.empty((size, size))
-    inverse = np.empty((size, size))
-    turn = np.empty((free, dim, 2, 3))           # the Hessian times each null direction
-    reflectors = np.empty((dim, rows))            # J^T, then its Householder reflectors
-    tau = np.empty(rows)
-    second = np.empty(rows)
+    count, held, dim = walk.shape[1], across.shape[0], (walk.shape[0] - 2) // 3
+    c, jac = np.empty((count, 3 + held)), np.empty((count, 3 + held, dim))
     for k in range(count):
-        # the residuals and the merit
         for a in range(3):
             c[k, a] = walk[0, k, a] - goal[a]
         for h in range(held):
             c[k, 3 + h] = (across[h, 0] * walk[1, k, 0] + across[h, 1] * walk[1, k, 1]
                            + across[h, 2] * walk[1, k, 2])
-        largest, travel = 0.0, 0.0
-        for i in range(dim):
-            moved = abs(x[k, i] - start[i])
-            largest = max(largest, moved * scale[i])
-            travel += moved
-        time[k] = largest / omega
-        norm = 0.0
-        for a in range(rows):
-            norm += c[k, a] * c[k, a]
-        merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
-        # the Jacobian of the residuals and its damped pseudo-inverse
         for i in range(dim):
             for a in range(3):
-                jac[a, i] = walk[2 + 3 * i, k, a]
+                jac[k, a, i] = walk[2 + 3 * i, k, a]
             for h in range(held):
-                jac[3 + h, i] = (across[h, 0] * walk[3 + 3 * i, k, 0]
-                                 + across[h, 1] * walk[3 + 3 * i, k, 1]
-                                 + across[h, 2] * walk[3 + 3 * i, k, 2])
-        wide = rows <= dim                       # J J^T, else J^T J
+                jac[k, 3 + h, i] = (across[h, 0] * walk[3 + 3 * i, k, 0]
+                                    + across[h, 1] * walk[3 + 3 * i, k, 1]
+                                    + across[h, 2] * walk[3 + 3 * i, k, 2])
+    return c, jac
+
+
+@kernel
+def damped_pseudo_inverses(jac: np.ndarray) -> np.ndarray:
+    """
+    Return J^+ (K, dim, rows) of each J in jac (K, rows, dim), by the damped normal equations.
+
+    J^T (J J^T + mu I)^-1, or (J^T J + mu I)^-1 J^T with more rows than columns, mu = 1e-12
+    trace + 1e-300.
+    """
+    count, rows, dim = jac.shape
+    size = min(rows, dim)
+    wide = rows <= dim                           # J J^T, else J^T J
+    gram, inverse = np.empty((size, size)), np.empty((size, size))
+    pinv = np.empty((count, dim, rows))
+    for k in range(count):
         trace = 0.0
         for a in range(size):
             for b in range(a, size):
                 total = 0.0
                 if wide:
                     for i in range(dim):
-                        total += jac[a, i] * jac[b, i]
+                        total += jac[k, a, i] * jac[k, b, i]
                 else:
                     for r in range(rows):
-                        total += jac[r, a] * jac[r, b]
+                        total += jac[k, r, a] * jac[k, r, b]
                 gram[a, b] = gram[b, a] = total
             trace += gram[a, a]
         damp = 1e-12 * trace + 1e-300
@@ -207,39 +187,66 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
         for i in range(dim):
             for r in range(rows):
                 total = 0.0
-                if wide:                         # J^T (J J^T + mu I)^-1
+                if wide:
                     for s in range(rows):
-                        total += jac[s, i] * inverse[s, r]
-                else:                            # (J^T J + mu I)^-1 J^T
+                        total += jac[k, s, i] * inverse[s, r]
+                else:
                     for s in range(dim):
-                        total += inverse[i, s] * jac[r, s]
+                        total += inverse[i, s] * jac[k, r, s]
                 pinv[k, i, r] = total
-        if free == 0:
-            continue
-        # the null space: the projector's largest column, or a complete QR of J^T
-        if free == 1:
-            best, best_size = 0, -1.0
-            for j in range(dim):
-                col_size = 0.0
-                for i in range(dim):
-                    entry = (1.0 if i == j else 0.0)
-                    for r in range(rows):
-                        entry -= pinv[k, i, r] * jac[r, j]
-                    col_size += entry * entry
-                if col_size > best_size:
-                    best, best_size = j, col_size
-            length = np.sqrt(best_size)
-            for i in range(dim):
-                entry = (1.0 if i == best else 0.0)
-                for r in range(rows):
-                    entry -= pinv[k, i, r] * jac[r, best]
-                null[k, 0, i] = np.divide(entry, length)
-        else:
-            for i in range(dim):
-                for r in range(rows):
-                    reflectors[i, r] = jac[r, i]
+    return pinv
+
+
+@kernel
+def null_bases(jac: np.ndarray, pinv: np.ndarray, free: int) -> np.ndarray:
+    """
+    Return a basis of the null space of each J (K, free, dim), orthonormal rows.
+
+    One direction: the largest column of the projector I - J^+ J (the first of equals),
+    normalised; more: the columns of a complete QR of J^T beyond its rows
+    (``complete_null_basis``).
+    """
+    count, rows, dim = jac.shape
+    null = np.zeros((count, free, dim))
+    reflectors, tau = np.empty((dim, rows)), np.empty(rows)   # J^T, then its reflectors
+    for k in range(count):
+        if free > 1:
+            reflectors[:] = jac[k].T
             complete_null_basis(reflectors, tau, null[k])
-        # half the second derivatives of the solutions: -J^+ n_a^T (d2c/dq2) n_b / 2
+            continue
+        best, best_size = 0, -1.0
+        for j in range(dim):
+            col_size = 0.0
+            for i in range(dim):
+                entry = (1.0 if i == j else 0.0)
+                for r in range(rows):
+                    entry -= pinv[k, i, r] * jac[k, r, j]
+                col_size += entry * entry
+            if col_size > best_size:
+                best, best_size = j, col_size
+        length = np.sqrt(best_size)
+        for i in range(dim):
+            entry = (1.0 if i == best else 0.0)
+            for r in range(rows):
+                entry -= pinv[k, i, r] * jac[k, r, best]
+            null[k, 0, i] = np.divide(entry, length)
+    return null
+
+
+@kernel
+def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray,
+                         across: np.ndarray) -> np.ndarray:
+    """
+    Return Q (K, k, k, dim): Q_ab = -J^+ c''_ab / 2, c''_ab = n_a^T (d2c/dq2) n_b.
+
+    ``hessian`` (K, dim, dim, 2, 3): the second derivatives of p and u, which the residuals
+    map as ``residuals_and_jacobians`` does; ``null`` (K, k, dim): the null directions n_a.
+    """
+    count, free, dim = null.shape
+    held, rows = across.shape[0], pinv.shape[2]
+    quad = np.zeros((count, free, free, dim))
+    turn, second = np.empty((free, dim, 2, 3)), np.empty(rows)   # the Hessian times each n_b
+    for k in range(count):
         turn[:] = 0.0
         for b in range(free):
             for i in range(dim):
@@ -268,7 +275,45 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
                     for r in range(rows):
                         total += pinv[k, i, r] * second[r]
                     quad[k, a, b, i] = quad[k, b, a, i] = -0.5 * total
-    return c, time, merit, pinv, null, quad
+    return quad
+
+
+@kernel
+def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
+              scale: np.ndarray, omega: float, goal: np.ndarray, across: np.ndarray,
+              travel_weight: float, weight: float, free: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray]:
+    """
+    Return c, R, the merit, J^+, N and Q at candidates x (K, planned) (see the module).
+
+    ``walk`` (2 + 3 planned, K, 3): p, u and per joint dp/dq_i, du/dq_i, Z_i, and ``hessian``
+    (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
+    directions); ``start`` and ``scale`` (omega / omega_i): per planned joint; ``across`` (h,
+    3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
+    ``weight`` (W): the merit's weights of the travel and of |c|; ``free``: the null
+    directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
+    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned) and Q (K, free,
+    free, planned).
+    """
+    count, dim = x.shape
+    c, jac = residuals_and_jacobians(walk, goal, across)
+    time, merit = np.empty(count), np.empty(count)
+    for k in range(count):                       # R (eq. 10) and the merit
+        largest, travel, norm = 0.0, 0.0, 0.0
+        for i in range(dim):
+            moved = abs(x[k, i] - start[i])
+            largest = max(largest, moved * scale[i])
+            travel += moved
+        for a in range(c.shape[1]):
+            norm += c[k, a] * c[k, a]
+        time[k] = largest / omega
+        merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
+    pinv = damped_pseudo_inverses(jac)
+    if free == 0:
+        return c, time, merit, pinv, np.zeros((count, 0, dim)), np.zeros((count, 0, 0, dim))
+    null = null_bases(jac, pinv, free)
+    return c, time, merit, pinv, null, solutions_curvatures(hessian, null, pinv, across)
 
 
 @kernel
