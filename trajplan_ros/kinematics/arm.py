@@ -190,6 +190,7 @@ class ArmModel:
     _tail: np.ndarray = field(init=False, repr=False, compare=False)
     _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
+    _reach: float = field(init=False, repr=False, compare=False)
 
     def __init__(self, rotations: Sequence, translations: Sequence, *,
                  base: np.ndarray | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
@@ -246,6 +247,8 @@ class ArmModel:
         put(self, '_kinds', np.array([_kind(r) for r in self.rotations], dtype=np.int64))
         put(self, '_tail', np.stack((self.tool_point, self.tool_axis)))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
+        t = np.vstack((self.translations, self.tool_point))
+        put(self, '_reach', float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2]))))
         if not self.reach < 1e6:
             raise InvalidArmModel(f'the links add up to {self.reach:.3g} m: not an arm')
 
@@ -316,10 +319,9 @@ class ArmModel:
         Rotations keep lengths, so each link moves the tool point by at most the length of its
         translation (sqrt(a_i^2 + d_i^2) for DH links) and the tool point lies within
         ``tool_point``'s length of the tip: no goal farther than the sum can be reached, whatever
-        the joint angles.
+        the joint angles. Computed once (the objective asks for it at every evaluation).
         """
-        t = np.vstack((self.translations, self.tool_point))
-        return float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2])))
+        return self._reach
 
     @property
     def dh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
