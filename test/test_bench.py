@@ -332,3 +332,16 @@ def test_unknown_method_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
         main(['bench', '--algorithms', 'iepso,simplex'])
     assert exc.value.code == 2
     assert "unknown method 'simplex'" in capsys.readouterr().err
+
+
+def test_a_baseline_version_plans_the_same_goals_in_its_own_process(capsys, tmp_path) -> None:
+    # this source tree as the baseline: the same planner, so the same answers, timed by the child
+    repo = Path(__file__).resolve().parents[1]
+    argv = ['bench', '--algorithms', 'iepso', '--goals', '3', '--seed', '5', '--quiet',
+            '--baseline', str(repo)]
+    assert main(argv) == 0
+    rows = {line.split()[0]: line.split() for line in capsys.readouterr().out.splitlines()
+            if line.startswith(('iepso ', 'baseline '))}
+    assert rows['baseline'][1:3] == rows['iepso'][1:3] == ['100.00', '%']
+    assert main(argv[:-1] + [str(tmp_path)]) == 2
+    assert 'no trajplan_ros package in that folder' in capsys.readouterr().err

@@ -5,9 +5,10 @@ trajplan_ros: direct trajectory planning with IEPSO and fuzzy rewards and punish
 
 The package is layered; each layer uses only those listed before it:
 
-* ``kinematics``: the arm model (forward kinematics and Jacobian), pure numpy;
+* ``kinematics``: the arm model (forward kinematics and Jacobian) and how kernels are compiled
+  (``jit``: numba, one cache policy);
 * ``planning``: the objective, the fuzzy shaping, IEPSO and the comparison optimisers, the
-  polish, the trajectory and ``plan``, pure numpy;
+  polish, the trajectory and ``plan``: numpy, with the hot loops as compiled kernels;
 * ``ros``: the ROS 2 node (the only layer besides ``tools`` that imports rclpy);
 * ``tools``: the ``trajplan`` command, benchmarks, figures and the demo.
 

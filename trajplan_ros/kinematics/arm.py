@@ -19,7 +19,8 @@ from typing import Sequence
 import numpy as np
 
 from trajplan_ros.kinematics.errors import InvalidArmModel
-from trajplan_ros.kinematics.forward import ABOUT_X, GENERAL, IDENTITY, walk_chain
+from trajplan_ros.kinematics.forward import (ABOUT_X, chain_hessian, GENERAL, IDENTITY,
+                                             walk_chain)
 from trajplan_ros.kinematics.urdf_import import read_chain
 
 __all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
@@ -42,57 +43,41 @@ class ToolJacobian:
     Per planned joint i: dp/dq_i = Z_i x (p - o_i), du/dq_i = Z_i x u and the signed joint axis
     Z_i (axis of joint i times its sign).
 
-    ``tool`` is (3, 2, N): x, y, z of p and u. ``columns`` is (3, planned, 3, N): x, y, z of
-    [i, 0] = dp/dq_i, [i, 1] = du/dq_i and [i, 2] = Z_i (coordinates first, for fast
-    arithmetic).
+    ``rows`` is (2 + 3 planned, N, 3) as ``forward.walk_chain`` gives them: p, u, then per
+    planned joint i dp/dq_i, du/dq_i and Z_i at rows 2 + 3i, 3 + 3i and 4 + 3i.
     """
 
-    tool: np.ndarray
-    columns: np.ndarray
+    rows: np.ndarray
 
     @property
     def p(self) -> np.ndarray:
         """Tool position, (N, 3)."""
-        return self.tool[:, 0].T
+        return self.rows[0]
 
     @property
     def u(self) -> np.ndarray:
         """Tool axis, (N, 3)."""
-        return self.tool[:, 1].T
+        return self.rows[1]
 
     @property
     def jp(self) -> np.ndarray:
         """dp/dq, (N, 3, planned)."""
-        return self.columns[:, :, 0].transpose(2, 0, 1)
+        return self.rows[2::3].transpose(1, 2, 0)
 
     @property
     def ju(self) -> np.ndarray:
         """du/dq, (N, 3, planned)."""
-        return self.columns[:, :, 1].transpose(2, 0, 1)
+        return self.rows[3::3].transpose(1, 2, 0)
 
-    def curvature(self, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def hessian(self) -> np.ndarray:
         """
-        Return the second derivatives of p and u along joint directions n (P, N, planned).
+        Return the second derivatives of p and u by every pair of planned joints.
 
-        They are d2/dt2 at t = 0 of p(q + t n) and u(q + t n), each (P, N, 3): P directions per
-        configuration in one pass.
-
-        The derivative of column i with respect to q_j, for j <= i (j nearer the base), is
-        Z_j x J_i, so the sum over all pairs is sum_j n_j Z_j x (2 T_j - n_j J_j) with
-        T_j = sum_{i >= j} n_i J_i.
+        (N, planned, planned, 2, 3): [k, i, j, 0] = d2p/dq_i dq_j, [k, i, j, 1] = d2u/dq_i dq_j
+        (``forward.chain_hessian``, compiled). Along joint directions n the second derivative
+        d2/dt2 p(q + t n) is n^T H n.
         """
-        weight = n.transpose(2, 0, 1)                            # (planned, P, N)
-        turned = self.columns[:, :, 2, None] * weight            # n_j Z_j, (3, planned, P, N)
-        # regrouped by column i: sum_i n_i (2 W_i - n_i Z_i) x J_i
-        # with W_i = sum_{j <= i} n_j Z_j
-        a = (np.cumsum(2.0 * turned, axis=1) - turned)[:, :, None]
-        jac = self.columns[:, :, :2, None]                       # (3, planned, 2, 1, N)
-        cross = a[_NEXT] * jac[_LAST] - a[_LAST] * jac[_NEXT]    # coordinates first
-        second = np.einsum('cikpn,ipn->ckpn', cross, weight)     # (3, 2, P, N)
-        return second[:, 0].transpose(1, 2, 0), second[:, 1].transpose(1, 2, 0)
-
-
-_NEXT, _LAST = [1, 2, 0], [2, 0, 1]      # (a x b)_c = a_{c+1} b_{c+2} - a_{c+2} b_{c+1}
+        return chain_hessian(self.rows)
 
 
 def _rot_x(angle: float) -> np.ndarray:
@@ -205,6 +190,7 @@ class ArmModel:
     _tail: np.ndarray = field(init=False, repr=False, compare=False)
     _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
+    _reach: float = field(init=False, repr=False, compare=False)
 
     def __init__(self, rotations: Sequence, translations: Sequence, *,
                  base: np.ndarray | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
@@ -261,6 +247,8 @@ class ArmModel:
         put(self, '_kinds', np.array([_kind(r) for r in self.rotations], dtype=np.int64))
         put(self, '_tail', np.stack((self.tool_point, self.tool_axis)))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
+        t = np.vstack((self.translations, self.tool_point))
+        put(self, '_reach', float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2]))))
         if not self.reach < 1e6:
             raise InvalidArmModel(f'the links add up to {self.reach:.3g} m: not an arm')
 
@@ -331,10 +319,9 @@ class ArmModel:
         Rotations keep lengths, so each link moves the tool point by at most the length of its
         translation (sqrt(a_i^2 + d_i^2) for DH links) and the tool point lies within
         ``tool_point``'s length of the tip: no goal farther than the sum can be reached, whatever
-        the joint angles.
+        the joint angles. Computed once (the objective asks for it at every evaluation).
         """
-        t = np.vstack((self.translations, self.tool_point))
-        return float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2])))
+        return self._reach
 
     @property
     def dh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -435,9 +422,7 @@ class ArmModel:
 
         ``tail`` as for ``tool``.
         """
-        vec = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
-        vec = np.ascontiguousarray(np.moveaxis(vec, 2, 0))         # (3, 2 + 3 planned, N)
-        return ToolJacobian(vec[:, :2], vec[:, 2:].reshape(3, self.planned, 3, -1))
+        return ToolJacobian(self._walk(np.asarray(q, dtype=float), tail, jacobian=True))
 
     def _walk(self, q: np.ndarray, tail: np.ndarray | None, jacobian: bool) -> np.ndarray:
         if tail is None:

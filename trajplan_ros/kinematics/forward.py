@@ -1,7 +1,7 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The compiled forward kinematics and Jacobian of a serial chain (eq. 1-2), every optimiser's path.
+The compiled forward kinematics of a serial chain (eq. 1-2), its Jacobian and its Hessian.
 
 ``walk_chain`` walks the joints from the tip towards the base for each configuration: per joint
 i it applies v <- Rz(theta_i) (L_i rotation v + L_i translation) to the tool point and only
@@ -9,6 +9,9 @@ the rotation to the tool axis, with theta_i = sign_i q_i + offset_i. With the Ja
 columns of joint i are born in its own frame, after its turn, as z x (tool point), z x (tool
 axis) and z itself, each times sign_i, and are then turned with everything else. A link
 rotation is applied by its kind: none, about x only (every DH link: alpha_i), or in general.
+
+``chain_hessian`` takes the second derivatives from those columns: joint i turns every column
+of a joint j after it about its axis Z_i, so d2/dq_i dq_j = Z_i x (column j) for i <= j.
 """
 from __future__ import annotations
 
@@ -16,7 +19,7 @@ import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
 
-__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'walk_chain']
+__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'chain_hessian', 'walk_chain']
 
 #: How a link rotation is applied: skipped, as a rotation about x, or as a 3x3 product.
 IDENTITY, ABOUT_X, GENERAL = 0, 1, 2
@@ -77,4 +80,29 @@ def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: n
                 v[col + 2, 2] = sign[i]
                 live = rows
         out[:, k, :] = v
+    return out
+
+
+@kernel
+def chain_hessian(rows: np.ndarray) -> np.ndarray:
+    """
+    Return the second derivatives of the tool point p and axis u by every pair of joints.
+
+    ``rows`` (2 + 3 planned, N, 3): ``walk_chain``'s with the Jacobian (dp/dq_i, du/dq_i and
+    the signed joint axis Z_i at rows 2 + 3i, 3 + 3i, 4 + 3i). Returns (N, planned, planned, 2,
+    3): [k, i, j, 0] = d2p/dq_i dq_j and [k, i, j, 1] = d2u/dq_i dq_j, both Z_i x (dp/dq_j,
+    du/dq_j) for i <= j, symmetric.
+    """
+    planned, n = (rows.shape[0] - 2) // 3, rows.shape[1]
+    out = np.empty((n, planned, planned, 2, 3))
+    for k in range(n):
+        for i in range(planned):
+            zx, zy, zz = rows[4 + 3 * i, k, 0], rows[4 + 3 * i, k, 1], rows[4 + 3 * i, k, 2]
+            for j in range(i, planned):
+                for t in range(2):
+                    x, y, z = rows[2 + 3 * j + t, k, 0], rows[2 + 3 * j + t, k, 1], \
+                        rows[2 + 3 * j + t, k, 2]
+                    out[k, i, j, t, 0] = out[k, j, i, t, 0] = zy * z - zz * y
+                    out[k, i, j, t, 1] = out[k, j, i, t, 1] = zz * x - zx * z
+                    out[k, i, j, t, 2] = out[k, j, i, t, 2] = zx * y - zy * x
     return out

@@ -34,10 +34,14 @@ Where the paper is silent or ill-posed, these are our choices (also listed in th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'gaussian']
+from trajplan_ros.kinematics.jit import kernel
+
+__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'closeness_eq15', 'gaussian',
+           'punishment_eq16', 'reward_eq17', 'rule_degree_table1', 'shaping_eq9']
 
 #: Output levels of Table 1, as degrees of reward (+) or punishment (-) in [-1, 1].
 OUTPUT_LEVELS: dict[str, float] = {
@@ -51,21 +55,99 @@ RULE_TABLE: dict[str, tuple[str, ...]] = {
     'M': ('VSP', 'VVP', 'VVP', 'RSP', 'NRP', 'RLR', 'RLR', 'RSR'),
     'L': ('VSP', 'VVP', 'RSP', 'RSP', 'NRP', 'RLR', 'RSR', 'VSR'),
 }
-#: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the L, M, H sets on tau.
-#: The rule base is evaluated in single precision (see ``RewardPunishment.rule_degree``).
+#: Centres of the closeness sets VF..VC on lambda in [-1, 1] and of the H, M, L sets on tau,
+#: and the output level of each rule (rows H, M, L). The rule base is evaluated in single
+#: precision: seven digits are plenty for fuzzy degrees, and a membership one set away from a
+#: narrow set's centre is then 0, not 1e-272.
 _SINGLE = np.float32
-_CLOSENESS_CENTRES = np.array(
-    [-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0]).astype(_SINGLE)
+_CLOSENESS_CENTRES = np.array([-1.0, -0.75, -0.5, -0.25, 0.0, 1 / 3, 2 / 3, 1.0], dtype=_SINGLE)
 _TIME_CENTRES = {'L': 0.0, 'M': 0.5, 'H': 1.0}
 _SINGLETONS = np.array([[OUTPUT_LEVELS[label] for label in RULE_TABLE[row]]
-                        for row in ('H', 'M', 'L')]).astype(_SINGLE)
-_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ('H', 'M', 'L')]).astype(_SINGLE)
-_ONES = np.ones(_SINGLETONS.size, dtype=_SINGLE)
+                        for row in ('H', 'M', 'L')], dtype=_SINGLE)
+_ROW_CENTRES = np.array([_TIME_CENTRES[row] for row in ('H', 'M', 'L')], dtype=_SINGLE)
 
 
-def gaussian(x: np.ndarray, c: float | np.ndarray, sigma: float) -> np.ndarray:
+@kernel
+def gaussian(x: np.ndarray, c: float, sigma: float) -> np.ndarray:
     """Return the Gaussian membership of Table 2, exp(-(x - c)^2 / sigma^2)."""
     return np.exp(-((x - c) ** 2) / sigma ** 2)
+
+
+@kernel
+def closeness_eq15(err: float, eps: float, err_max: float, log_scale: bool) -> float:
+    """Return lambda of eq. (15) in [-1, 1] (log-scaled on the punishment side by default)."""
+    if err <= eps:
+        lam = 1.0 - err / eps
+    elif log_scale:
+        lam = -np.log(err / eps) / np.log(err_max / eps)
+    else:
+        lam = -(err - eps) / (err_max - eps)
+    return min(max(lam, -1.0), 1.0)
+
+
+@kernel
+def rule_degree_table1(lam: float, tau: float, sigma: float) -> float:
+    """
+    Return the Table 1 inference, the degree lambda_R in [-1, 1] (0 where no rule fires).
+
+    Rule strength min(mu_row(tau), mu_col(lambda)) (eq. 6), Gaussian memberships (Table 2),
+    the strength-weighted mean of the rules' output levels, in single precision.
+    """
+    lam32, tau32, sigma32 = np.float32(lam), np.float32(tau), np.float32(sigma)
+    total = weighted = np.float32(0.0)
+    for r in range(_ROW_CENTRES.size):
+        row = gaussian(tau32, _ROW_CENTRES[r], np.float32(2.0) * sigma32)
+        for c in range(_CLOSENESS_CENTRES.size):
+            strength = min(row, gaussian(lam32, _CLOSENESS_CENTRES[c], sigma32))
+            total += strength
+            weighted += strength * _SINGLETONS[r, c]
+    return float(weighted / total) if total > 0.0 else 0.0
+
+
+@kernel
+def punishment_eq16(lam: float, k: float) -> float:
+    """Return the punishment alpha of eq. (16), k exp(-5 (lambda + 1)^2)."""
+    return k * np.exp(-5.0 * (lam + 1.0) ** 2)
+
+
+@kernel
+def reward_eq17(err: float, eps: float, s: float, j: float) -> float:
+    """
+    Return the reward of eq. (17): beta1 above s, beta2 at or below it.
+
+    beta1 runs from 0 (err = eps) to -12 (err = s), beta2 from -12 to -24 (err = 0). The paper's
+    0.02 / (eps - s) is 4 eps / (eps - s) with eps = 0.005 mm; written in eps it holds in any
+    unit: beta1 = -j (-4 err + 4 eps) / (eps - s).
+    """
+    if err <= s:
+        return -j * ((-4.0 / s) * err + 8.0)
+    return -j * 4.0 * (eps - err) / (eps - s)
+
+
+@kernel
+def shaping_eq9(err: np.ndarray, tau: np.ndarray, err_max: float, eps: float, s: float,
+                k: float, j: float, sigma: float, log_scale: bool, rules: bool,
+                rewarded: bool) -> np.ndarray:
+    """
+    Return S of eq. (9) for each error and time fraction: punishment above eps, else reward.
+
+    With ``rules`` the punishment's lambda is averaged with Table 1's degree (module docstring).
+    """
+    out = np.empty(err.size)
+    for i in range(err.size):
+        if err[i] <= eps:
+            out[i] = reward_eq17(err[i], eps, s, j) if rewarded else 0.0
+            continue
+        lam = closeness_eq15(err[i], eps, err_max, log_scale)
+        if rules:
+            lam = 0.5 * (lam + rule_degree_table1(lam, min(max(tau[i], 0.0), 1.0), sigma))
+        out[i] = punishment_eq16(lam, k)
+    return out
+
+
+def _each(kernel_of_one: Callable[..., float], *args: Any) -> np.ndarray:
+    """Apply a kernel of scalars to every element of its broadcast arguments."""
+    return np.vectorize(kernel_of_one, otypes=[float])(*args)
 
 
 @dataclass(frozen=True)
@@ -105,59 +187,27 @@ class RewardPunishment:
 
     def closeness(self, err: np.ndarray, err_max: float) -> np.ndarray:
         """Return lambda of eq. (15), the degree in [-1, 1] to which the error approaches zero."""
-        err = np.asarray(err, dtype=float)
-        reward_side = 1.0 - err / self.eps
-        if self.lambda_scale == 'linear':
-            punish_side = -(err - self.eps) / (err_max - self.eps)
-        else:
-            ratio = np.maximum(err, self.eps) / self.eps
-            punish_side = -np.log(ratio) / np.log(err_max / self.eps)
-        return np.clip(np.where(err <= self.eps, reward_side, punish_side), -1.0, 1.0)
+        return _each(closeness_eq15, np.asarray(err, dtype=float), self.eps, err_max,
+                     self.lambda_scale == 'log')
 
     def rule_degree(self, lam: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """
-        Return the Table 1 inference: degree lambda_R in [-1, 1] from closeness and time tau.
-
-        Rule strength is min(mu_row(tau), mu_col(lambda)) (eq. 6); the degree is the
-        strength-weighted mean of the rules' output levels. The memberships are computed in
-        single precision (seven digits are plenty for fuzzy degrees; it halves the time of
-        this, the costliest part of F, because float32 exp is vectorised by numpy).
-        """
-        lam, tau = np.asarray(lam, dtype=float), np.asarray(tau, dtype=float)
-        mu_col = gaussian(lam.ravel()[None, :].astype(_SINGLE), _CLOSENESS_CENTRES[:, None],
-                          _SINGLE(self.sigma))                                            # (8, N)
-        mu_row = gaussian(tau.ravel()[None, :].astype(_SINGLE), _ROW_CENTRES[:, None],
-                          _SINGLE(2 * self.sigma))                                        # (3, N)
-        weight = np.minimum(mu_row[:, None, :], mu_col[None, :, :]).reshape(_ONES.size, lam.size)
-        degree = (_SINGLETONS.ravel() @ weight) / (_ONES @ weight)
-        return degree.astype(float).reshape(lam.shape)
+        """Return the Table 1 inference: degree lambda_R in [-1, 1] from closeness and time tau."""
+        return _each(rule_degree_table1, np.asarray(lam, dtype=float),
+                     np.asarray(tau, dtype=float), self.sigma)
 
     def punishment(self, lam: np.ndarray) -> np.ndarray:
         """Return the punishment alpha of eq. (16), k exp(-5 (lambda + 1)^2)."""
-        return self.k * np.exp(-5.0 * (lam + 1.0) ** 2)
+        return _each(punishment_eq16, np.asarray(lam, dtype=float), self.k)
 
     def reward_value(self, err: np.ndarray) -> np.ndarray:
-        """
-        Return the reward of eq. (17): beta1 above s, beta2 at or below it.
-
-        beta1 runs from 0 (err = eps) to -12 (err = s), beta2 from -12 to -24 (err = 0).
-        """
-        err = np.asarray(err, dtype=float)
-        # The paper's 0.02 / (eps - s) is 4 eps / (eps - s) with eps = 0.005 mm; written in eps
-        # it holds in any unit: beta1 = -j (-4 err + 4 eps) / (eps - s).
-        beta1 = -self.j * 4.0 * (self.eps - err) / (self.eps - self.s)
-        beta2 = -self.j * ((-4.0 / self.s) * err + 8.0)
-        return np.where(err <= self.s, beta2, beta1)
+        """Return the reward of eq. (17): beta1 above s, beta2 at or below it."""
+        return _each(reward_eq17, np.asarray(err, dtype=float), self.eps, self.s, self.j)
 
     def __call__(self, err: np.ndarray, tau: np.ndarray, err_max: float) -> np.ndarray:
         """Return S(err) of eq. (9): punishment above eps, reward at or below it."""
         err = np.asarray(err, dtype=float)
-        lam = self.closeness(err, err_max)
-        if self.fuzzy_rules:
-            lam_eff = 0.5 * (lam + self.rule_degree(lam, np.clip(tau, 0.0, 1.0)))
-        else:
-            lam_eff = lam
-        alpha = self.punishment(lam_eff)
-        if self.reward:
-            return np.where(err > self.eps, alpha, self.reward_value(err))
-        return np.where(err > self.eps, alpha, 0.0)
+        tau = np.broadcast_to(np.asarray(tau, dtype=float), err.shape)
+        return shaping_eq9(np.ascontiguousarray(err.ravel()), np.ascontiguousarray(tau.ravel()),
+                           float(err_max), self.eps, self.s, self.k, self.j, self.sigma,
+                           self.lambda_scale == 'log', self.fuzzy_rules,
+                           self.reward).reshape(err.shape)

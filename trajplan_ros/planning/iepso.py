@@ -69,12 +69,11 @@ Additions of ours, documented in the README, each on by default because it measu
   the one with the least total joint travel sum |x_i - start_i|, which the polish also seeks
   (``polish``); the least F when none is on the goal;
 * an ``interrupt`` (the planner's deadline and stop hook), if given, is asked at the end of
-  every iteration that the stopping rule has not ended, and its reason ends the run with the
-  best answer so far (``OptimizeResult.interrupted``). Asking draws no random numbers, so a run
-  it never ends is bit-identical. Between two asks there is one iteration and at most one polish
-  round: a few milliseconds with the defaults (the curve search, as short, runs only once the
-  stopping rule has fired; the multi-start, in place of the first round, takes tens of
-  milliseconds on arms of 6 or 7 joints);
+  every iteration and after every step of every polish (rounds, curve search, multi-start:
+  ``_or_interrupted``), and its reason ends the run with the best answer so far
+  (``OptimizeResult.interrupted``): a stop or a deadline waits at most one polish step, a few
+  milliseconds on a 7-joint arm. Asking draws no random numbers, so a run it never ends is
+  bit-identical;
 * a polish round ends before ``polish_steps`` once that agreement holds and no candidate that is
   still converging (within an eighth of the arm's reach of the goal, its steps still accepted)
   could beat it: one not settled yet that is faster, or a settled one within 1 % that is still
@@ -335,7 +334,7 @@ def _round_members(swarm: _Swarms, rng: np.random.Generator, count: int) -> np.n
 
 
 def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, count: int,
-                  steps: int, enough: _Enough) -> Evaluation:
+                  steps: int, enough: _Enough | None) -> Evaluation:
     """
     Polish each swarm's p_g and ``count - 1`` random members' p_i (ours).
 
@@ -358,10 +357,10 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
 
 
 def _round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, stopping: _Stopping,
-           count: int, steps: int) -> tuple[bool, bool]:
+           count: int, steps: int, interrupt: Interrupt | None) -> tuple[bool, bool]:
     """Run a polish round and ask the stopping rule; return (stop, goal reached) (ours)."""
-    refined = _polish_round(swarm, obj, rng, count, steps,
-                            _polish_is_enough(stopping.agreement, obj.arm.reach / 8))
+    refined = _polish_round(swarm, obj, rng, count, steps, _or_interrupted(
+        _polish_is_enough(stopping.agreement, obj.arm.reach / 8), interrupt))
     # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement is
     # judged on the motion time of the candidates settled on the goal
     agree, _ = _agreeing(refined.motion_time, refined.error)
@@ -369,7 +368,7 @@ def _round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, stopping: _
 
 
 def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, probes: int,
-                  steps: int, count: int) -> None:
+                  steps: int, count: int, interrupt: Interrupt | None) -> None:
     """
     Polish the seeds along the solution curves (``solution_curve``); keep a better one (ours).
 
@@ -385,17 +384,18 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     times ``probes`` screened probes and a polish round's candidates (each swarm's p_g and
     ``count - 1`` random members' p_i), instead of the seeds where the solutions form no
     curves, before them on curves of six planned joints (so that the curves run through its
-    answer).
+    answer). ``interrupt``, when it asks to stop, ends every polish at its next step and skips
+    what would follow.
     """
     if _by_multistart(obj):
         members = _round_members(swarm, rng, count)
         probed = _probes(obj, rng, probes * WIDE_PROBES)
-        _keep_fastest(swarm, obj, _multistart(obj, members, probed, 2 * steps))
-    if curve_constraint(obj) is not None:
+        _keep_fastest(swarm, obj, _multistart(obj, members, probed, 2 * steps, interrupt))
+    if curve_constraint(obj) is not None and asked(interrupt) is None:
         best = _answer(swarm, obj)
         here = obj(best[None, :])
         _keep_fastest(swarm, obj, _along_curves(obj, rng, best, bool(here.error[0] <= ON_GOAL),
-                                                probes, steps), best, here)
+                                                probes, steps, interrupt), best, here)
 
 
 def _keep_fastest(swarm: _Swarms, obj: Objective, polished: np.ndarray,
@@ -423,16 +423,32 @@ def _keep_fastest(swarm: _Swarms, obj: Objective, polished: np.ndarray,
 
 
 def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, reached: bool,
-                  probes: int, steps: int) -> np.ndarray:
+                  probes: int, steps: int, interrupt: Interrupt | None) -> np.ndarray:
     """Return the seeds along the curves through ``best`` and ``probes`` points, polished."""
     points = np.concatenate((best[None, :],
                              initial_population(rng, obj.lower, obj.upper, (probes,))))
     seeds = curve_seeds(obj, points, best if reached else None)
     if not len(seeds):
         return seeds
-    enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL, faster=False)
+    enough = _or_interrupted(_polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL,
+                                               faster=False), interrupt)
     return settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, enough=enough),
                   ON_GOAL)
+
+
+def _or_interrupted(enough: _Enough | None, interrupt: Interrupt | None) -> _Enough | None:
+    """
+    Return ``enough`` that also ends the polish, at its next step, when ``interrupt`` stops.
+
+    A polish of many candidates runs for tens of milliseconds on a 7-joint arm: asking only
+    after each iteration would leave a stop or a deadline waiting that long.
+    """
+    if interrupt is None:
+        return enough
+
+    def ended(time: np.ndarray, error: np.ndarray, radius: np.ndarray) -> bool:
+        return interrupt() is not None or (enough is not None and enough(time, error, radius))
+    return ended
 
 
 def _by_multistart(obj: Objective) -> bool:
@@ -476,8 +492,8 @@ def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
     return np.concatenate((uniform, around))
 
 
-def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int
-                ) -> np.ndarray:
+def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: int,
+                interrupt: Interrupt | None) -> np.ndarray:
     """
     Return the swarms' candidates and the best probes polished, the fastest further (ours).
 
@@ -499,10 +515,14 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     points = np.concatenate((bests, start[None, :], probes[keep[: len(probes) // SCREENED]]))
     trust = np.where(np.arange(len(points)) < len(bests), ROUND_TRUST, WIDE_TRUST)
     first = polish_candidates(obj, points, max_steps=steps, trust=trust,
-                              prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS)
+                              prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS,
+                              enough=_or_interrupted(None, interrupt))
+    if asked(interrupt) is not None:
+        return first
     ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > FINISH_NEAR * obj.arm.reach))[:FINISHED]
-    enough = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL)
+    enough = _or_interrupted(_polish_is_enough(1, obj.arm.reach / 8, active=0.0,
+                                               settled=ON_GOAL), interrupt)
     finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS, enough=enough)
     return settle(obj, np.concatenate((first, finished)), ON_GOAL)
 
@@ -615,8 +635,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     each velocity component at that fraction of the joint's range. ``swarms``,
     ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
     ``RADIAL_DEFAULTS``), ``agreement`` to 2. Without ``polish`` this is the paper's algorithm
-    alone, stopped by ``History.stalled``. ``interrupt`` is asked after every iteration the
-    stopping rule has not ended; its reason ends the run with the best answer so far.
+    alone, stopped by ``History.stalled``. ``interrupt`` is asked after every iteration and
+    after every polish step; its reason ends the run with the best answer so far.
     """
     swarms, polish_count, polish_steps, agreement = _settings(
         obj, population, max_iter, polish_period, swarms, polish_count, polish_steps, agreement)
@@ -638,19 +658,23 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
         nfev += _evaluate(swarm, obj)
         if polish and (it + 1) % polish_period == 0:        # ours: see the module docstring
             if curve_search and _by_multistart(obj) and not searched:    # in place of a round
-                _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
+                _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count,
+                              interrupt)
                 stop = converged = bool(swarm.best()[1] <= obj.shaping.eps)
                 searched = True
             else:
-                stop, reached = _round(swarm, obj, rng, stopping, polish_count, polish_steps)
+                stop, reached = _round(swarm, obj, rng, stopping, polish_count, polish_steps,
+                                       interrupt)
                 converged = stop and reached
                 if stop and curve_search:
-                    _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count)
+                    _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count,
+                                  interrupt)
             if not stop and restart:
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())
         if not polish and history.stalled():
             converged = stop = True
-        if stop or (interrupted := asked(interrupt)) is not None:
+        # asked even when the rule stops: a stop inside the last search cut it short
+        if (interrupted := asked(interrupt)) is not None or stop:
             break
     return history.result(obj, _answer(swarm, obj), nfev, converged, interrupted)

@@ -12,10 +12,10 @@ from trajplan_ros.planning.objective import Objective
 
 __all__ = ['OptimizeResult', 'History', 'Interrupt', 'asked', 'initial_population']
 
-#: Asked by an optimiser once per iteration, after recording it: None to carry on, or the reason
-#: to end the run now with the best answer so far (the result's ``interrupted``). The optimiser
-#: only calls it (no random numbers, no arithmetic), so a run it never ends is bit-identical to
-#: a run without it.
+#: Asked by an optimiser after each iteration (IEPSO also after each polish step): None to carry
+#: on, or the reason to end the run now with the best answer so far (the result's
+#: ``interrupted``). The optimiser only calls it (no random numbers, no arithmetic), so a run it
+#: never ends is bit-identical to a run without it.
 Interrupt = Callable[[], str | None]
 
 

@@ -11,8 +11,9 @@ Direct trajectory planning (Lv et al. 2019): search the final joint angles, then
     (<PlanStatus.SUCCEEDED: 'succeeded'>, 4.514)
 
 A caller that must bound the search gives ``max_planning_time`` (s, on ``time.monotonic``)
-and/or ``stop`` (a callable, e.g. true after Ctrl-C). The optimiser asks both once per
-iteration; either ends the search with its best answer so far, as TIMED_OUT or CANCELLED.
+and/or ``stop`` (a callable, e.g. true after Ctrl-C). The optimiser asks both after every
+iteration (IEPSO also after every polish step); either ends the search with its best answer so
+far, as TIMED_OUT or CANCELLED.
 """
 from __future__ import annotations
 
@@ -147,7 +148,7 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param shaping: the rewards-and-punishment settings (Table 4 defaults).
     :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
     :param max_planning_time: longest search (s, monotonic clock); None: no limit.
-    :param stop: asked once per iteration; True ends the search (e.g. on Ctrl-C).
+    :param stop: asked after every iteration and polish step; True ends the search (Ctrl-C).
     """
     arm = arm if arm is not None else paper_arm()
     mode = Mode(mode)

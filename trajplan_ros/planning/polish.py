@@ -52,6 +52,7 @@ import numpy as np
 
 from trajplan_ros.kinematics.arm import ToolJacobian
 from trajplan_ros.planning.active_set import minimax_step
+from trajplan_ros.planning.linearisation import line_searches, linearise, minimum_norm_steps
 from trajplan_ros.planning.objective import Objective
 
 __all__ = ['Linearisation', 'polish', 'settle']
@@ -142,62 +143,6 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
     return minimax_step(*arrays, sets.pieces, sets.vertex, sets.clashes, r)
 
 
-def _roots(qa: np.ndarray, qb: np.ndarray, qc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Return the real roots of qa z^2 + qb z + qc = 0 (NaN where there are none), stably.
-
-    Call inside np.errstate(divide="ignore", invalid="ignore").
-    """
-    disc = qb * qb - 4.0 * qa * qc
-    q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
-    flat = np.abs(qa) <= 1e-14 * (np.abs(qb) + 1e-300)
-    return np.where(flat, -qc / qb, q / qa), np.where(flat, np.nan, qc / q)
-
-
-def _line_minimax(b: np.ndarray, n: np.ndarray, a: np.ndarray, zlo: np.ndarray,
-                  zhi: np.ndarray) -> np.ndarray:
-    """
-    Return the z in [zlo, zhi] that minimises max_i |b_i + n_i z + a_i z^2|.
-
-    Ties go to the least total travel. b, n, a: (K, m); zlo, zhi: (K,). Returns z (K,).
-    """
-    iu, ju = _pairs(b.shape[1])
-    bt, nt, at = b.T, n.T, a.T                                         # (m, K): fast broadcasting
-    # |q_i| = |q_j| where q_i - q_j = 0 or q_i + q_j = 0; zeros of q_i; all as quadratics
-    qa = np.concatenate((at[iu] - at[ju], at[iu] + at[ju], at))
-    qb = np.concatenate((nt[iu] - nt[ju], nt[iu] + nt[ju], nt))
-    qc = np.concatenate((bt[iu] - bt[ju], bt[iu] + bt[ju], bt))
-    side = np.where(bt != 0.0, np.sign(bt), np.sign(nt))      # the signs of the q_i at z = 0
-    with np.errstate(divide='ignore', invalid='ignore'):
-        # vertices, zeros, stationary points of each |q_i| and of the total travel, the bounds
-        least_travel = -(side * nt).sum(axis=0) / (2.0 * (side * at).sum(axis=0))
-        cand = np.concatenate((*_roots(qa, qb, qc), -nt / (2.0 * at), least_travel[None],
-                               zlo[None], zhi[None], np.zeros((1, b.shape[0]))))  # (C, K)
-    cand = np.clip(np.where(np.isfinite(cand), cand, 0.0), zlo, zhi)
-    d = np.abs(bt[:, None, :] + (nt[:, None, :] + at[:, None, :] * cand) * cand)   # (m, C, K)
-    worst = functools.reduce(np.maximum, d)      # faster than reductions over a short axis 0
-    total = functools.reduce(np.add, d)
-    total = np.where(worst <= worst.min(axis=0) + _TIE, total, np.inf)
-    return cand[np.argmin(total, axis=0), np.arange(b.shape[0])]
-
-
-def _inverse(m: np.ndarray) -> np.ndarray:
-    """
-    Return the inverses of symmetric matrices (K, s, s).
-
-    The adjugate formula for s = 3 (the position constraints; several times cheaper than LAPACK
-    on small batches), np.linalg.inv otherwise.
-    """
-    if m.shape[1] != 3:
-        return np.linalg.inv(m)
-    a, b, c, _, d, e, _, _, f = m.reshape(-1, 9).T
-    cof = (d * f - e * e, c * e - b * f, b * e - c * d,
-           a * f - c * c, b * c - a * e, a * d - b * b)
-    inv_det = 1.0 / (a * cof[0] + b * cof[1] + c * cof[2])
-    full = np.array([cof[i] for i in (0, 1, 2, 1, 3, 4, 2, 4, 5)])
-    return (full * inv_det).T.reshape(-1, 3, 3)
-
-
 def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
     return obj.residuals(*obj.tool(x))
 
@@ -206,10 +151,12 @@ class Linearisation:
     """
     The constraints c(x) linearised at K candidates x, with what a polish step needs.
 
-    That is c, the merit, a pseudo-inverse of the constraint Jacobian J, a basis of its null
-    space and ``quad`` (K, k, k, planned): half the second derivatives of the solution set along
-    every pair of null directions, on its diagonal x''/2 = -J^+ c''/2 along each direction n,
-    with c'' the exact second derivative of c along n (``ToolJacobian.curvature``).
+    That is c, the motion time, the error, the merit, a pseudo-inverse of the constraint
+    Jacobian J, a basis of its null space and ``quad`` (K, k, k, planned): half the second
+    derivatives of the solution set along every pair of null directions, on its diagonal
+    x''/2 = -J^+ c''/2 along each direction n, with c'' the exact second derivative of c along n
+    (from ``ToolJacobian.hessian``). One compiled kernel computes them
+    (``linearisation.linearise``).
 
     The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
     small matrix products, much cheaper than an SVD per step and well behaved near
@@ -223,59 +170,36 @@ class Linearisation:
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float,
                  newton_only: bool = False) -> None:
-        d = obj.tool_jacobian(x)
-        self.c = obj.residuals(d.p, d.u)
-        self.time = obj.motion_time(x)
+        x = np.ascontiguousarray(x, dtype=float)
+        d: ToolJacobian = obj.tool_jacobian(x)
+        planned, across = x.shape[1], obj.across_basis
+        free = 0 if newton_only else max(planned - 3 - len(across), 0)
+        hessian = d.hessian() if free else np.empty((0, planned, planned, 2, 3))
+        self.c, self.time, self.merit, self.pinv, self.null, self.quad = linearise(
+            d.rows, hessian, x, np.ascontiguousarray(obj.planned_start),
+            np.ascontiguousarray(obj.time_scale), obj.omega, np.ascontiguousarray(obj.goal),
+            np.ascontiguousarray(across), _TRAVEL_WEIGHT, float(weight), free)
         self.error = obj.errors(d.p, d.u)
-        travel = np.abs(x - obj.planned_start).sum(axis=1)
-        size = (np.sqrt(np.einsum('kr,kr->k', self.c, self.c)) if obj.radial
-                else self.error)                             # free mode: c = p - goal
-        self.merit = self.time * obj.omega + _TRAVEL_WEIGHT * travel + weight * size
-        jac = (np.concatenate((d.jp, obj.across_basis @ d.ju), axis=1) if obj.radial
-               else d.jp)
-        k, rows, dim = jac.shape
-        jt = np.swapaxes(jac, 1, 2)
-        gram = jac @ jt if rows <= dim else jt @ jac
-        damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
-        inverse = _inverse(gram + damp * _eye(gram.shape[1]))
-        self.pinv = jt @ inverse if rows <= dim else inverse @ jt          # (K, dim, rows)
-        free = 0 if newton_only else max(dim - rows, 0)
-        if free == 0:
-            self.null = np.empty((k, 0, dim))
-        elif free == 1:
-            projector = _eye(dim) - self.pinv @ jac
-            col = np.argmax(np.einsum('kij,kij->kj', projector, projector), axis=1)
-            n = projector[np.arange(k), :, col]
-            self.null = (n / np.sqrt(np.einsum('ki,ki->k', n, n))[:, None])[:, None, :]
-        else:           # the columns of a complete QR of J^T beyond its rows span the null space
-            self.null = np.swapaxes(np.linalg.qr(jt, mode='complete')[0][:, :, rows:], 1, 2)
-        self.quad = np.zeros((k, free, free, dim))
-        if free == 1:   # no pairs: the plain path (curves, the paper arm's hot path)
-            self.quad[:, 0, 0] = self._second(obj, d, self.null.transpose(1, 0, 2))[0]
-        elif free:      # every direction and every pair of directions in one pass
-            a, b = _pairs(free)
-            half = self._second(obj, d, np.concatenate(
-                (self.null, self.null[:, a] + self.null[:, b]), axis=1).transpose(1, 0, 2))
-            diagonal = np.arange(free)
-            self.quad[:, diagonal, diagonal] = half[:free].transpose(1, 0, 2)
-            self.quad[:, a, b] = self.quad[:, b, a] = (
-                0.5 * half[free:] - 0.5 * (half[a] + half[b])).transpose(1, 0, 2)
 
-    def _second(self, obj: Objective, d: ToolJacobian, n: np.ndarray) -> np.ndarray:
-        """Return half the second derivative of the solutions along directions n (P, K, dim)."""
-        return 0.5 * self.newton(obj.linear_residuals(*d.curvature(n)))
+    def newton(self, res: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
+        """
+        Return minimum-norm steps dx (K, planned): J dx = -res (least squares off its range).
 
-    def newton(self, res: np.ndarray) -> np.ndarray:
-        """Minimum-norm steps dx (..., K, planned): J dx = -res (least squares off its range)."""
-        return -(self.pinv @ res[..., None])[..., 0]
+        With ``radius`` (K,), each shortened to at most its radius.
+        """
+        if radius is None:
+            radius = np.full(len(self.pinv), np.inf)
+        return minimum_norm_steps(self.pinv, np.ascontiguousarray(res, dtype=float),
+                                  np.ascontiguousarray(radius, dtype=float))
 
     _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
 
     def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
         for name in self._FIELDS:
-            mine, theirs = getattr(self, name), getattr(other, name)
-            mine[mask] = theirs[mask]
+            mine = getattr(self, name)
+            np.copyto(mine, getattr(other, name),
+                      where=mask.reshape(mask.shape + (1,) * (mine.ndim - 1)))
 
     def take(self, mask: np.ndarray) -> None:
         """Keep only the candidates where mask is true."""
@@ -302,21 +226,16 @@ def _null_step(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.n
 def _line_searches(here: Linearisation, base: np.ndarray, start: np.ndarray,
                    scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, radius: np.ndarray
                    ) -> np.ndarray:
-    """Return ``base`` moved by the line searches along each null direction in turn."""
-    for j in range(here.null.shape[1]):
-        direction, half_curv = here.null[:, j, :], here.quad[:, j, j, :]
-        with np.errstate(divide='ignore', invalid='ignore'):           # the joint limits along z
-            a_lo, a_hi = (lo - base) / direction, (hi - base) / direction
-        moving = np.abs(direction) > 1e-15
-        zlo = functools.reduce(
-            np.maximum, np.where(moving, np.fmin(a_lo, a_hi), -np.inf).T, -radius)
-        zhi = functools.reduce(
-            np.minimum, np.where(moving, np.fmax(a_lo, a_hi), np.inf).T, radius)
-        zhi = np.maximum(zhi, zlo)
-        z = _line_minimax((base - start) * scale, direction * scale, half_curv * scale,
-                          zlo, zhi)[:, None]
-        base = base + (direction + half_curv * z) * z
-    return base
+    """
+    Return ``base`` moved by the line searches along each null direction in turn.
+
+    Each is the exact minimax of the joints' displacements, parabolas in the step, ties going
+    to the least total travel (``linearisation.line_searches``, compiled).
+    """
+    return line_searches(here.null, here.quad, np.ascontiguousarray(base, dtype=float),
+                         np.ascontiguousarray(start), np.ascontiguousarray(scale),
+                         np.ascontiguousarray(lo), np.ascontiguousarray(hi),
+                         np.ascontiguousarray(radius, dtype=float), _TIE)
 
 
 def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarray,
@@ -330,7 +249,7 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
     """
     lo, hi, scale = obj.lower, obj.upper, obj.time_scale
     start = obj.planned_start
-    base = x + _within(here.newton(here.c), radius)
+    base = x + here.newton(here.c, radius)
     if wide:
         base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius,
                           vertex_only)
@@ -338,7 +257,7 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
         base = _line_searches(here, base, start, scale, lo, hi, radius)
     trial = np.clip(base, lo, hi)
     for _ in range(_CHORD_STEPS if wide else 1):
-        trial = np.clip(trial + _within(here.newton(_residuals(obj, trial)), radius), lo, hi)
+        trial = np.clip(trial + here.newton(_residuals(obj, trial), radius), lo, hi)
     return trial
 
 

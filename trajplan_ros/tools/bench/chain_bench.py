@@ -273,14 +273,15 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
                   'minimisation)', solve, 'ikpy', 'ikpy.chain')
 
 
-def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase) -> np.ndarray:
-    """Return the method's answer as every joint's angle."""
+def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase
+          ) -> tuple[np.ndarray, float | None]:
+    """Return the method's answer as every joint's angle, and its own time if it has one."""
     answer = method.solve(arm, mode, case.goal, case.start, case.seed)
     if answer.joints is not None:
-        return answer.joints
+        return answer.joints, answer.seconds
     if answer.plan is not None:
-        return answer.plan.joint_goal
-    return Objective(arm, case.goal, case.start, mode=mode).full(answer.x)[0]
+        return answer.plan.joint_goal, answer.seconds
+    return Objective(arm, case.goal, case.start, mode=mode).full(answer.x)[0], answer.seconds
 
 
 def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmModel,
@@ -294,9 +295,9 @@ def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmMod
         obj = Objective(arm, case.goal, case.start, mode=mode)
         for method in methods:
             clock = time.perf_counter()
-            q = _full(arm, method, mode, case)
+            q, seconds = _full(arm, method, mode, case)
             res = out[method.name]
-            res.seconds[k] = time.perf_counter() - clock
+            res.seconds[k] = time.perf_counter() - clock if seconds is None else seconds
             res.q[k] = q
             p, u = fk.tool(q)
             res.error[k] = np.linalg.norm(p - case.goal)

@@ -25,8 +25,10 @@ from typing import Sequence
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning.objective import Mode
+from trajplan_ros.planning.planner import prepare
 from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, positive_count,
                                           UsageError)
+from trajplan_ros.tools.bench.baseline import baseline_method
 from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
 from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain, ikpy_method,
                                                   IndependentFk, run_chain)
@@ -87,6 +89,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         'goals without a solution (success: reported not reached); default all')
     p.add_argument('--seed', type=int, default=0,
                    help='seed of the goals, starts and plans (default 0)')
+    p.add_argument('--baseline', metavar='DIR',
+                   help='add a row "baseline": IEPSO of another version of this package, from '
+                        'its source tree DIR (e.g. git worktree add DIR 56ebf49, the numpy '
+                        'core), on the same goals in the same run')
     p.add_argument('--csv', metavar='FILE', help='also write the table as CSV')
     p.add_argument('--plans-csv', metavar='FILE',
                    help='write every plan (goal, start, answer, score) as CSV')
@@ -109,6 +115,11 @@ def _chosen_methods(args: argparse.Namespace, arm: ArmModel) -> tuple[list[Metho
     elif 'ikpy' in wanted:
         raise UsageError('ikpy needs --urdf (it reads the chain from the file)')
     chosen = [table[n] for n in table if n in wanted]
+    if args.baseline:
+        try:
+            chosen.append(baseline_method(args.baseline))
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
     notes = [f'{m.name}: {m.requires} is not installed, skipped '
              f"(pip install {m.requires}, or the package's 'bench' extra)"
              for m in chosen if not m.available]
@@ -212,6 +223,7 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
 def _run(args: argparse.Namespace) -> int:
     arm, mode = arm_from_arguments(args), Mode(args.mode)
     methods, notes = _chosen_methods(args, arm)
+    prepare()                      # compile or load the kernels now, not in the first timed plan
     if args.urdf:
         load(methods)
         return _run_chain(args, arm, mode, methods, notes)

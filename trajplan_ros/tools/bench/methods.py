@@ -50,12 +50,14 @@ class Answer:
     """
     A method's joint goal for the planned joints (rad), with the plan when ``plan`` made it.
 
-    ``joints``: every joint's angle, when the method gives them (ikpy).
+    ``joints``: every joint's angle, when the method gives them (ikpy). ``seconds``: the time of
+    the plan as the method measured it (a baseline in another process), else the call's.
     """
 
     x: np.ndarray
     plan: PlanResult | None = None
     joints: np.ndarray | None = None
+    seconds: float | None = None
 
 
 Solver = Callable[[ArmModel, Mode, np.ndarray, np.ndarray, int], Answer]

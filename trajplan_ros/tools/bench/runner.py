@@ -104,7 +104,7 @@ def run(methods: Sequence[Method], cases: Sequence[Case], arm: ArmModel, mode: M
             answer = method.solve(arm, mode, case.goal, case.start, case.seed)
             seconds = time.perf_counter() - clock
             _score(out[method.name], k, obj, answer, case)
-            out[method.name].seconds[k] = seconds
+            out[method.name].seconds[k] = seconds if answer.seconds is None else answer.seconds
         if step is not None:
             step()
     return out

@@ -1,0 +1,114 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Another version of this package as a row of the benchmark: ``trajplan bench --baseline DIR``.
+
+DIR is a source tree of that version, for example the numpy core before the compiled kernels:
+``git worktree add /tmp/trajplan-numpy 56ebf49``. The row plans the same goals from the same
+starts with the same seeds as the other rows, in turn with them, in a child process that imports
+the package from DIR (the same Python and venv); the child times each ``plan`` call as this
+process times its own rows (``time.perf_counter`` around the call, objective included), so the
+pipe between the two costs the row nothing. The arm goes to the child as its arrays, so that
+every version plans exactly this arm; only the API the versions share is used: ``ArmModel``'s
+constructor and ``plan(goal, start, arm=, mode=, seed=)``.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+import subprocess
+import sys
+from typing import Any
+
+import numpy as np
+
+from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning.objective import Mode
+from trajplan_ros.tools.bench.methods import Answer, Method
+
+__all__ = ['baseline_method']
+
+#: The child: reads one JSON request a line (an arm, or a goal to plan), answers one a line.
+_CHILD = """
+import json, sys, time
+import numpy as np
+import trajplan_ros
+from trajplan_ros import ArmModel, plan
+print(json.dumps({'package': trajplan_ros.__file__}), flush=True)
+arm = None
+for line in sys.stdin:
+    request = json.loads(line)
+    if 'arm' in request:
+        spec = request['arm']
+        arm = ArmModel(np.array(spec.pop('rotations')), np.array(spec.pop('translations')),
+                       base=np.array(spec.pop('base')), **spec)
+        print(json.dumps({}), flush=True)
+        continue
+    clock = time.perf_counter()
+    result = plan(request['goal'], request['start'], arm=arm, mode=request['mode'],
+                  seed=request['seed'])
+    seconds = time.perf_counter() - clock
+    joints = None if result.joint_goal is None else result.joint_goal.tolist()
+    print(json.dumps({'joints': joints, 'seconds': seconds, 'message': result.message}),
+          flush=True)
+"""
+
+
+def _arm_spec(arm: ArmModel) -> dict[str, Any]:
+    """Return the arm as the arrays of ``ArmModel``'s constructor (JSON keeps every float)."""
+    return {'rotations': arm.rotations.tolist(), 'translations': arm.translations.tolist(),
+            'base': arm.base.tolist(), 'tool_point': arm.tool_point.tolist(),
+            'tool_axis': arm.tool_axis.tolist(), 'sign': arm.sign.tolist(),
+            'offset': arm.offset.tolist(), 'lower': arm.lower.tolist(),
+            'upper': arm.upper.tolist(), 'velocity': arm.velocity.tolist(),
+            'joint_names': list(arm.joint_names), 'planned': arm.planned,
+            'base_link': arm.base_link, 'tip_link': arm.tip_link}
+
+
+class _Child:
+    """The other version's planner in a child process, for one arm at a time."""
+
+    def __init__(self, directory: Path) -> None:
+        env = {**os.environ, 'PYTHONPATH': str(directory)}
+        self._proc = subprocess.Popen([sys.executable, '-c', _CHILD], cwd=directory, env=env,
+                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        package = Path(self._ask(None)['package']).resolve()
+        if directory not in package.parents:
+            self._proc.kill()
+            raise ValueError(f'--baseline {directory}: the child imported {package}, not the '
+                             'package in that folder')
+        self._arm: ArmModel | None = None
+
+    def _ask(self, request: dict[str, Any] | None) -> dict[str, Any]:
+        if request is not None:
+            self._proc.stdin.write(json.dumps(request) + '\n')
+            self._proc.stdin.flush()
+        line = self._proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f'the baseline process ended (exit code {self._proc.wait()})')
+        return json.loads(line)
+
+    def solve(self, arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
+              seed: int) -> Answer:
+        """Plan ``goal`` from ``start`` in the child; the answer carries the child's time."""
+        if arm is not self._arm:
+            self._ask({'arm': _arm_spec(arm)})
+            self._arm = arm
+        answer = self._ask({'goal': np.asarray(goal, float).tolist(),
+                            'start': np.asarray(start, float).tolist(), 'mode': mode.value,
+                            'seed': int(seed)})
+        if answer['joints'] is None:
+            raise ValueError(f"the baseline rejected goal {list(goal)}: {answer['message']}")
+        joints = np.array(answer['joints'])
+        planned = arm.without_idle_tail(mode is Mode.RADIAL).planned
+        return Answer(joints[:planned], joints=joints, seconds=answer['seconds'])
+
+
+def baseline_method(directory: str) -> Method:
+    """Return the row ``baseline``: IEPSO of the version in ``directory`` (module docstring)."""
+    folder = Path(directory).resolve()
+    if not (folder / 'trajplan_ros' / '__init__.py').is_file():
+        raise ValueError(f'--baseline {directory}: no trajplan_ros package in that folder (give '
+                         'a source tree, e.g. git worktree add DIR 56ebf49)')
+    return Method('baseline', f'IEPSO of the version in {folder}', _Child(folder).solve)
