@@ -77,18 +77,6 @@ _SMALLEST_RADIUS = 1e-9
 _TRAVEL_WEIGHT = 1e-6
 
 
-@functools.lru_cache(maxsize=16)
-def _eye(n: int) -> np.ndarray:
-    eye = np.eye(n)
-    eye.flags.writeable = False
-    return eye
-
-
-@functools.lru_cache(maxsize=8)
-def _pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
-    return np.triu_indices(m, 1)
-
-
 class _ActiveSets(NamedTuple):
     """The active sets that ``_active_set_minimax`` tries (``_active_sets``)."""
 
@@ -259,12 +247,6 @@ def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarra
     for _ in range(_CHORD_STEPS if wide else 1):
         trial = np.clip(trial + here.newton(_residuals(obj, trial), radius), lo, hi)
     return trial
-
-
-def _within(step: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Return the steps (..., m) shortened to at most ``radius`` (...) each."""
-    size = np.sqrt(np.einsum('...m,...m->...', step, step))
-    return step * np.minimum(1.0, radius / np.maximum(size, 1e-300))[..., None]
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
