@@ -142,6 +142,37 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
             np.testing.assert_allclose(z[i, c], want, rtol=1e-7, atol=1e-9)
 
 
+@pytest.mark.parametrize('k, m', [(2, 5), (3, 6), (4, 7)])
+def test_the_step_is_the_best_of_the_sets_on_the_model(k: int, m: int) -> None:
+    # z = 0 and every set's step within the trust radius, judged on the model in numpy: the
+    # kernel's choice is the least motion time among those whose linear part keeps within the
+    # limits
+    rng = np.random.default_rng(30 + k)
+    r = min(m, k + _LARGEST)
+    sets = _active_sets(r, k)
+    null = np.stack([np.linalg.qr(rng.normal(size=(m, k)))[0].T for _ in range(8)])
+    quad = rng.normal(0.0, 0.3, (8, k, k, m))
+    b = rng.uniform(-3.0, 3.0, (8, m))
+    gap_lo, gap_hi = rng.uniform(-2.0, -0.05, (8, m)), rng.uniform(0.05, 2.0, (8, m))
+    scale, limit = rng.uniform(1.0, 2.0, m), rng.uniform(0.1, 1.0, 8)
+    steps = sqp_steps(*active_pieces(b, null, quad, scale, gap_lo, gap_hi, r), sets.pieces,
+                      sets.vertex, sets.clashes, r)
+    z = _active_set_minimax(b, null, quad, scale, gap_lo, gap_hi, limit)
+    for i in range(8):
+        tried = np.concatenate((np.zeros((1, k)), steps[i]))
+        size = np.linalg.norm(tried, axis=1)
+        tried = tried * np.minimum(1.0, limit[i] / np.maximum(size, 1e-300))[:, None]
+        linear = tried @ null[i]
+        usable = np.all((linear >= gap_lo[i] - 1e-12) & (linear <= gap_hi[i] + 1e-12), axis=1)
+        moved = linear + np.einsum('ca,abm,cb->cm', tried, quad[i], tried)
+        times = np.max(np.abs(b[i] + np.clip(moved, gap_lo[i], gap_hi[i])) * scale, axis=1)
+        times = np.where(usable, times, np.inf)
+        assert np.isin(tried, z[i]).all(axis=1).any()                   # one of them
+        chosen = np.argmin(np.abs(tried - z[i]).max(axis=1))
+        assert times[chosen] == pytest.approx(times.min(), rel=1e-12)
+    assert np.abs(z).max() > 0.0
+
+
 @pytest.mark.parametrize('n', range(1, 7))
 def test_the_small_solves_are_numpys(n: int) -> None:
     # Cramer's rule up to 3x3, Gaussian elimination beyond: against LAPACK, and a singular
