@@ -317,9 +317,9 @@ def line_steps(lagrangian: np.ndarray, gram: np.ndarray, rows: np.ndarray, grad:
                     hn += lagrangian[i, t, a, u] * line[u]
                 along += hn * steps[i, t, a]
                 curved += hn * line[a]
-            along = np.divide(-(pull + along), curved)
+            amount = np.divide(-(pull + along), curved)
             for a in range(k):
-                z = steps[i, t, a] + along * line[a]
+                z = steps[i, t, a] + amount * line[a]
                 steps[i, t, a] = z if np.isfinite(z) else 0.0
 
 
