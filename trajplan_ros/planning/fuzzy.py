@@ -208,6 +208,6 @@ class RewardPunishment:
         err = np.asarray(err, dtype=float)
         tau = np.broadcast_to(np.asarray(tau, dtype=float), err.shape)
         return shaping_eq9(np.ascontiguousarray(err.ravel()), np.ascontiguousarray(tau.ravel()),
-                           float(err_max), self.eps, self.s, self.k, self.j, self.sigma,
-                           self.lambda_scale == 'log', self.fuzzy_rules,
-                           self.reward).reshape(err.shape)
+                           float(err_max), float(self.eps), float(self.s), float(self.k),
+                           float(self.j), float(self.sigma), self.lambda_scale == 'log',
+                           bool(self.fuzzy_rules), bool(self.reward)).reshape(err.shape)

@@ -436,6 +436,29 @@ def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, re
                   ON_GOAL)
 
 
+class _Asked:
+    """A run's interrupt that remembers the first reason it gave, and then gives only that."""
+
+    def __init__(self, interrupt: Interrupt) -> None:
+        self._interrupt = interrupt
+        self.reason: str | None = None
+
+    def __call__(self) -> str | None:
+        if self.reason is None:
+            self.reason = self._interrupt()
+        return self.reason
+
+
+def _cut_by(interrupt: _Asked | None) -> str | None:
+    """Return why the interrupt has stopped the run (a polish was cut short), or None."""
+    return None if interrupt is None else interrupt.reason
+
+
+def _cut(interrupt: _Asked | None) -> bool:
+    """Tell whether the interrupt has stopped the run."""
+    return _cut_by(interrupt) is not None
+
+
 def _or_interrupted(enough: _Enough | None, interrupt: Interrupt | None) -> _Enough | None:
     """
     Return ``enough`` that also ends the polish, at its next step, when ``interrupt`` stops.
@@ -648,6 +671,7 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     history = History(max_iter, tol, patience=50, eps=obj.shaping.eps)
     stopping = _Stopping(tol, patience_rounds, agreement, obj.shaping.eps)
     stop, converged, interrupted, searched = False, False, None, False
+    interrupt = _Asked(interrupt) if interrupt is not None else None
     for it in range(max_iter):
         # the paper's iteration: eq. (3)-(5) and last-elimination, with w and c3 scheduled
         frac = it / max(max_iter - 1, 1)
@@ -666,15 +690,15 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
                 stop, reached = _round(swarm, obj, rng, stopping, polish_count, polish_steps,
                                        interrupt)
                 converged = stop and reached
-                if stop and curve_search:
+                if stop and curve_search and not _cut(interrupt):
                     _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count,
                                   interrupt)
-            if not stop and restart:
+            if not stop and restart and not _cut(interrupt):
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())
         if not polish and history.stalled():
             converged = stop = True
-        # asked even when the rule stops: a stop inside the last search cut it short
-        if (interrupted := asked(interrupt)) is not None or stop:
+        # complete when the rule stops, unless a stop cut a polish short on the way
+        if (interrupted := _cut_by(interrupt) if stop else asked(interrupt)) or stop:
             break
     return history.result(obj, _answer(swarm, obj), nfev, converged, interrupted)

@@ -136,7 +136,7 @@ class Objective:
 
     @staticmethod
     def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:
-        g = np.asarray(goal, dtype=float)
+        g = np.array(goal, dtype=float)          # a copy: writable, as the kernels are compiled
         if g.shape != (3,):
             raise InvalidRequest(
                 f'goal must be 3 coordinates (x, y, z) in metres, got shape {g.shape}')

@@ -8,7 +8,8 @@ DIR is a source tree of that version, for example the numpy core before the comp
 starts with the same seeds as the other rows, in turn with them, in a child process that imports
 the package from DIR (the same Python and venv); the child times each ``plan`` call as this
 process times its own rows (``time.perf_counter`` around the call, objective included), so the
-pipe between the two costs the row nothing. The arm goes to the child as its arrays, so that
+pipe between the two costs the row nothing (it plans once, untimed, for each arm first, as this
+process compiles or loads its kernels first). The arm goes to the child as its arrays, so that
 every version plans exactly this arm; only the API the versions share is used: ``ArmModel``'s
 constructor and ``plan(goal, start, arm=, mode=, seed=)``.
 """
@@ -43,6 +44,7 @@ for line in sys.stdin:
         spec = request['arm']
         arm = ArmModel(np.array(spec.pop('rotations')), np.array(spec.pop('translations')),
                        base=np.array(spec.pop('base')), **spec)
+        plan(arm.tool(np.zeros((1, arm.n_joints)))[0][0] * 0.9, arm=arm, seed=0)  # warm, untimed
         print(json.dumps({}), flush=True)
         continue
     clock = time.perf_counter()
@@ -70,10 +72,14 @@ class _Child:
     """The other version's planner in a child process, for one arm at a time."""
 
     def __init__(self, directory: Path) -> None:
-        env = {**os.environ, 'PYTHONPATH': str(directory)}
+        env = {**os.environ, 'PYTHONPATH': os.pathsep.join(
+            filter(None, [str(directory), os.environ.get('PYTHONPATH')]))}
         self._proc = subprocess.Popen([sys.executable, '-c', _CHILD], cwd=directory, env=env,
                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-        package = Path(self._ask(None)['package']).resolve()
+        try:
+            package = Path(self._ask(None)['package']).resolve()
+        except RuntimeError as exc:                    # it could not import the package
+            raise ValueError(f'--baseline {directory}: {exc}') from None
         if directory not in package.parents:
             self._proc.kill()
             raise ValueError(f'--baseline {directory}: the child imported {package}, not the '
