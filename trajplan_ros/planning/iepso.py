@@ -454,11 +454,6 @@ def _cut_by(interrupt: _Asked | None) -> str | None:
     return None if interrupt is None else interrupt.reason
 
 
-def _cut(interrupt: _Asked | None) -> bool:
-    """Tell whether the interrupt has stopped the run."""
-    return _cut_by(interrupt) is not None
-
-
 def _or_interrupted(enough: _Enough | None, interrupt: Interrupt | None) -> _Enough | None:
     """
     Return ``enough`` that also ends the polish, at its next step, when ``interrupt`` stops.
@@ -690,10 +685,10 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
                 stop, reached = _round(swarm, obj, rng, stopping, polish_count, polish_steps,
                                        interrupt)
                 converged = stop and reached
-                if stop and curve_search and not _cut(interrupt):
+                if stop and curve_search and _cut_by(interrupt) is None:
                     _curve_search(swarm, obj, rng, curve_search, polish_steps, polish_count,
                                   interrupt)
-            if not stop and restart and not _cut(interrupt):
+            if not stop and restart and _cut_by(interrupt) is None:
                 nfev += _restart(swarm, obj, rng, tol)
         history.record(*swarm.best())
         if not polish and history.stalled():
