@@ -10,7 +10,6 @@ test_chain_bench.py: URDF arms against yourdfpy's FK).
 from __future__ import annotations
 
 import ast
-import builtins
 import inspect
 import os
 from pathlib import Path
@@ -22,14 +21,14 @@ import numpy as np
 import pytest
 from trajplan_ros import ArmModel, plan
 from trajplan_ros.kinematics import forward
-from trajplan_ros.kinematics.jit import kernels
+from trajplan_ros.kinematics.jit import CORE, core_stamp, kernels
 from trajplan_ros.planning import prepare, RewardPunishment
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
-#: Names a kernel may read besides its own module's: numpy and the builtins.
-ALLOWED = {'np', *dir(builtins)}
+#: The modules whose sources key the kernels' cache (``jit.CORE``).
+CORE_MODULES = tuple(f'trajplan_ros.{folder.name}' for folder in CORE)
 
 
 def kernel_modules() -> dict[Path, ast.Module]:
@@ -44,51 +43,64 @@ def kernel_modules() -> dict[Path, ast.Module]:
     return found
 
 
-def own_names(tree: ast.Module) -> set[str]:
-    """Return the names a module defines itself: functions, classes and assignments."""
-    names = set()
-    for node in tree.body:
-        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
-            names.add(node.name)
-        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
-            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-            for target in targets:
-                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
-    return names
-
-
 def test_every_kernel_module_is_found() -> None:
     assert Path(forward.__file__).resolve() in kernel_modules()
     assert len(kernels()) >= 1
 
 
 @pytest.mark.parametrize('path', sorted(kernel_modules()), ids=lambda p: p.name)
-def test_kernels_read_only_their_own_modules_names(path: Path) -> None:
-    # numba drops a cached kernel when its own file changes, not when a kernel or a constant
-    # it takes from another file does: so a kernel reads nothing from another file
+def test_kernels_read_only_names_of_the_core(path: Path) -> None:
+    # the cache is keyed by the core's sources (jit.core_stamp): a kernel that read a constant
+    # or called a function from elsewhere could run with an old copy of it compiled in
+    assert any(folder in path.parents for folder in CORE), path
     tree = kernel_modules()[path]
-    own = own_names(tree)
+    imported = {alias.asname or alias.name: node.module for node in tree.body
+                if isinstance(node, ast.ImportFrom) for alias in node.names}
     for node in tree.body:
         if not isinstance(node, ast.FunctionDef) or not any(
                 isinstance(d, ast.Name) and d.id == 'kernel' for d in node.decorator_list):
             continue
-        body = [n for stmt in node.body for n in ast.walk(stmt) if isinstance(n, ast.Name)]
-        local = {a.arg for a in node.args.args} | {
-            n.id for n in body if isinstance(n.ctx, ast.Store)}
-        read = {n.id for n in body if isinstance(n.ctx, ast.Load)}
-        foreign = read - local - own - ALLOWED
-        assert not foreign, f'{path.name}: kernel {node.name} reads {sorted(foreign)}'
+        read = {n.id for stmt in node.body for n in ast.walk(stmt)
+                if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        foreign = {name: imported[name] for name in read & imported.keys()
+                   if not imported[name].startswith(CORE_MODULES)}
+        assert not foreign, f'{path.name}: kernel {node.name} reads {foreign}'
 
 
-def test_kernels_call_only_kernels_of_their_own_file() -> None:
-    # at run time too: a kernel made otherwise than with @kernel, or one called under a name
-    # that the AST check takes for its own, would escape it
+def test_kernels_call_only_kernels_of_the_core() -> None:
+    # at run time too: a kernel made otherwise than with @kernel would escape the AST check
     for k in kernels():
-        own = Path(k.py_func.__code__.co_filename).resolve()
-        assert own in kernel_modules(), k
+        assert Path(k.py_func.__code__.co_filename).resolve() in kernel_modules(), k
         for name, value in inspect.getclosurevars(k.py_func).globals.items():
             if hasattr(value, 'py_func'):                          # a kernel that it calls
-                assert Path(value.py_func.__code__.co_filename).resolve() == own, (k, name)
+                assert value in kernels(), (k, name)
+            elif not isinstance(value, (int, float, tuple, np.ndarray)):
+                assert value is np, (k, name)
+
+
+def test_a_change_anywhere_in_the_core_changes_every_kernels_cache_key(tmp_path) -> None:
+    core = tuple(tmp_path / folder.name for folder in CORE)
+    for folder in core:
+        (folder / 'sub').mkdir(parents=True)
+        (folder / 'a.py').write_text('X = 1\n')
+    before = core_stamp(core)
+    assert core_stamp(core) == before
+    (core[1] / 'sub' / 'b.py').write_text('def f():\n    return 2\n')
+    core_stamp.cache_clear()
+    assert core_stamp(core) != before
+    (core[1] / 'sub' / 'b.py').unlink()
+    core_stamp.cache_clear()
+    assert core_stamp(core) == before
+    (core[0] / 'a.py').write_text('X = 2\n')
+    core_stamp.cache_clear()
+    assert core_stamp(core) != before
+    core_stamp.cache_clear()
+
+
+def test_kernels_are_cached_under_the_core_stamp() -> None:
+    prepare()
+    for k in kernels():
+        assert k._cache._impl.locator.get_source_stamp() == core_stamp(), k
 
 
 def test_every_kernel_releases_the_gil_and_caches() -> None:
@@ -140,7 +152,8 @@ def test_the_first_run_compiles_and_says_so_later_ones_load(tmp_path) -> None:
 def test_without_a_writable_cache_it_compiles_and_warns_once() -> None:
     # numba's only locator is then the user's folder, and that cannot be made: as with a
     # read-only package folder and a read-only HOME (a container run as another user)
-    env = {**os.environ, 'NUMBA_CACHE_LOCATOR_CLASSES': 'UserProvidedCacheLocator',
+    env = {**os.environ, 'NUMBA_CACHE_LOCATOR_CLASSES':
+           'trajplan_ros.kinematics.jit.UserProvidedLocator',
            'NUMBA_CACHE_DIR': '/dev/null/cache'}
     done = run_plan(env)
     assert done.returncode == 0, done.stderr

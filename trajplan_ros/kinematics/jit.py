@@ -4,16 +4,17 @@
 How the planning core compiles its kernels: numba's ``njit``, with one cache policy.
 
 Every kernel is ``@kernel``: compiled by numba with ``nogil=True`` (the node's executor thread
-runs while a plan computes) and ``cache=True``, so that a process after the first loads the
-machine code from disk instead of compiling it. numba keeps the cache beside the source (the
-package's ``__pycache__``), else in the user's cache folder (``NUMBA_CACHE_DIR``, or
-``~/.cache``); where neither is writable it cannot cache at all, and the kernels are then
-compiled in every process, with one warning saying how to set ``NUMBA_CACHE_DIR``.
+runs while a plan computes) and cached on disk, so that a process after the first loads the
+machine code instead of compiling it. The cache is kept where ``NUMBA_CACHE_DIR`` says, else
+beside the source (the package's ``__pycache__``), else in the user's cache folder
+(``~/.cache/numba``); where none is writable the kernels are compiled in every process, with one
+warning saying how to set ``NUMBA_CACHE_DIR``.
 
-numba drops a cached kernel when its own source file changes, but not when a kernel it calls
-in another file does, and it freezes the globals a kernel reads. So a kernel calls only kernels
-of its own file and reads only constants of its own file (a test holds the package to that),
-and a changed kernel can never run stale.
+numba's own cache is keyed by the kernel's file alone: it would keep a kernel whose callee in
+another file changed, with the callee's old code and constants compiled in. Ours is keyed by
+the package version and a hash of every source file of the core (``kinematics`` and
+``planning``, ``core_stamp``): any change there recompiles every kernel, so a kernel may call
+kernels and read constants of other core files and can never run stale.
 
 ``warm_up`` compiles or loads every kernel once, so that no plan pays for it; it reports how
 long that took and whether anything had to be compiled.
@@ -21,24 +22,77 @@ long that took and whether anything had to be compiled.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
+import hashlib
+from importlib import metadata
 import logging
+from pathlib import Path
 import time
 from typing import Any, Callable
 
 import numba
+from numba.core import caching
 
-__all__ = ['Warmup', 'kernel', 'kernels', 'warm_up']
+__all__ = ['CORE', 'Warmup', 'core_stamp', 'kernel', 'kernels', 'warm_up']
 
 _LOG = logging.getLogger('trajplan_ros')
+#: The folders whose sources key every kernel's cache: the kernels and all they read.
+CORE = tuple(Path(__file__).resolve().parents[1] / name for name in ('kinematics', 'planning'))
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
 
 
+def _version() -> str:
+    try:
+        return metadata.version('trajplan_ros')
+    except metadata.PackageNotFoundError:       # run from a source tree
+        return 'source'
+
+
+@functools.lru_cache(maxsize=None)
+def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
+    """Return a hash of the package version and of every ``.py`` file under ``folders``."""
+    digest = hashlib.sha256(_version().encode())
+    for folder in folders:
+        for path in sorted(folder.rglob('*.py')):
+            digest.update(str(path.relative_to(folder.parent)).encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+class _CoreStamped:
+    """A numba cache locator whose source stamp is the whole core's (``core_stamp``)."""
+
+    def get_source_stamp(self) -> str:
+        return core_stamp()
+
+
+class UserProvidedLocator(_CoreStamped, caching.UserProvidedCacheLocator):
+    """``NUMBA_CACHE_DIR``, core-stamped."""
+
+
+class InTreeLocator(_CoreStamped, caching.InTreeCacheLocator):
+    """The package's ``__pycache__``, core-stamped."""
+
+
+class UserWideLocator(_CoreStamped, caching.UserWideCacheLocator):
+    """The user's cache folder, core-stamped."""
+
+
+class _KernelCacheImpl(caching.CompileResultCacheImpl):
+    _locator_classes = [UserProvidedLocator, InTreeLocator, UserWideLocator]
+
+
+class _KernelCache(caching.FunctionCache):
+    _impl_class = _KernelCacheImpl
+
+
 def kernel(func: Callable[..., Any]) -> Any:
     """Compile ``func`` with numba: no GIL, cached on disk where any cache folder is writable."""
+    compiled = numba.njit(nogil=True)(func)
     try:
-        compiled = numba.njit(cache=True, nogil=True)(func)
+        compiled._cache = _KernelCache(func)       # what njit(cache=True) does, core-stamped
     except RuntimeError as exc:                 # numba: "cannot cache ...: no locator available"
         if 'no locator available' not in str(exc):
             raise
@@ -47,7 +101,6 @@ def kernel(func: Callable[..., Any]) -> Any:
             _LOG.warning('trajplan_ros: no writable cache folder for the compiled kernels, so '
                          'every process compiles them anew; set NUMBA_CACHE_DIR to a writable '
                          'folder to keep them')
-        compiled = numba.njit(nogil=True)(func)
     _KERNELS.append(compiled)
     return compiled
 
