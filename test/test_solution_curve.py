@@ -11,8 +11,8 @@ from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.planning.polish import Linearisation
 from trajplan_ros.planning.reference import exact_minimum
-from trajplan_ros.planning.solution_curve import (_limit_crossings, curve_constraint,
-                                                  curve_seeds, follow, project)
+from trajplan_ros.planning.solution_curve import (curve_constraint, curve_seeds, follow,
+                                                  limit_crossings, project)
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 ARM = paper_arm()
@@ -81,7 +81,7 @@ def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> Non
     lo = obj.lower
     a = np.array([[lo[0] - 0.1, 0, 0, 0], [0, 0, 0, 0], [lo[0] - 0.2, 0, 0, 0]])
     b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.05, 0, 0, 0]])
-    enter, leave, nearest = _limit_crossings(obj, a, b)
+    enter, leave, nearest = limit_crossings(obj.lower, obj.upper, a, b)
     np.testing.assert_allclose(enter[0], [lo[0], 0, 0, 0])      # enters at the limit
     np.testing.assert_allclose(leave[0], b[0])
     np.testing.assert_allclose(np.stack((enter[1], leave[1])), np.stack((a[1], b[1])))
@@ -89,7 +89,8 @@ def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> Non
     np.testing.assert_allclose(nearest[2], [lo[0], 0, 0, 0])     # ... but 0.05 rad from it
     assert np.all(np.isnan(nearest[:2]))
     # through the wrap at -pi/pi: the chord is the short way round, outside q1's limits
-    wrap = _limit_crossings(obj, np.array([[3.0, 0, 0, 0]]), np.array([[-3.0, 0, 0, 0]]))
+    wrap = limit_crossings(obj.lower, obj.upper, np.array([[3.0, 0, 0, 0]]),
+                           np.array([[-3.0, 0, 0, 0]]))
     assert np.all(np.isnan(wrap))
 
 

@@ -19,8 +19,8 @@ from typing import Sequence
 import numpy as np
 
 from trajplan_ros.kinematics.errors import InvalidArmModel
-from trajplan_ros.kinematics.forward import (ABOUT_X, chain_hessian, GENERAL, IDENTITY,
-                                             walk_chain)
+from trajplan_ros.kinematics.forward import (ABOUT_X, Chain, chain_hessian, GENERAL, IDENTITY,
+                                             tool_rows, walk_chain)
 from trajplan_ros.kinematics.urdf_import import read_chain
 
 __all__ = ['ArmModel', 'InvalidArmModel', 'ToolJacobian']
@@ -187,9 +187,8 @@ class ArmModel:
     base_link: str
     tip_link: str
     _kinds: np.ndarray = field(init=False, repr=False, compare=False)
-    _tail: np.ndarray = field(init=False, repr=False, compare=False)
-    _moved_base: bool = field(init=False, repr=False, compare=False)
     _moving: dict[bool, ArmModel] = field(init=False, repr=False, compare=False)
+    _chain: Chain = field(init=False, repr=False, compare=False)
     _reach: float = field(init=False, repr=False, compare=False)
 
     def __init__(self, rotations: Sequence, translations: Sequence, *,
@@ -213,7 +212,6 @@ class ArmModel:
             raise InvalidArmModel('base must be a finite 4x4 transform')
         _rotations('base', base[None, :3, :3], 1)
         put(self, 'base', base)
-        put(self, '_moved_base', not np.array_equal(base, np.eye(4)))
         put(self, 'tool_point', _vector('tool_point', tool_point, 3))
         axis = _vector('tool_axis', tool_axis, 3)
         if not np.linalg.norm(axis) > 1e-9:
@@ -245,8 +243,10 @@ class ArmModel:
         put(self, 'base_link', str(base_link))
         put(self, 'tip_link', str(tip_link))
         put(self, '_kinds', np.array([_kind(r) for r in self.rotations], dtype=np.int64))
-        put(self, '_tail', np.stack((self.tool_point, self.tool_axis)))
         put(self, '_moving', {})                 # without_idle_tail's answers, built once
+        put(self, '_chain', Chain(self.sign, self.offset, self.rotations, self.translations,
+                                  self._kinds, np.stack((self.tool_point, self.tool_axis)),
+                                  np.ascontiguousarray(base), n, planned))
         t = np.vstack((self.translations, self.tool_point))
         put(self, '_reach', float(np.sum(np.hypot(np.hypot(t[:, 0], t[:, 1]), t[:, 2]))))
         if not self.reach < 1e6:
@@ -326,7 +326,7 @@ class ArmModel:
     @property
     def dh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Return (a, alpha, d) when the chain is a standard DH chain (``from_dh``), else None."""
-        plain = (not self._moved_base and not self.tool_point.any()
+        plain = (np.array_equal(self.base, np.eye(4)) and not self.tool_point.any()
                  and np.array_equal(self.tool_axis, (0.0, 0.0, 1.0)))
         if not plain or np.any(self._kinds == GENERAL) or self.translations[:, 1].any():
             return None
@@ -368,6 +368,7 @@ class ArmModel:
                         tip_link=self.tip_link)
         # a user plans at least two joints; with the second idle, the planner moves one
         object.__setattr__(held, 'planned', planned)
+        object.__setattr__(held, '_chain', held._chain._replace(planned=planned))
         return held
 
     def speeds(self, omega: float) -> np.ndarray:
@@ -403,8 +404,10 @@ class ArmModel:
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
-        q = np.asarray(q, dtype=float)[None, :]
-        return self._chain(q, self.n_joints, self.planned, self._tail, jacobian=False)[:, 0]
+        q = np.ascontiguousarray(q, dtype=float)[None, :]
+        return walk_chain(q, self.sign, self.offset, self.rotations, self.translations,
+                          self._kinds, self.n_joints, self.planned, self._chain.tail, self.planned,
+                          False)[:, 0]
 
     def tool(self, q: np.ndarray, tail: np.ndarray | None = None
              ) -> tuple[np.ndarray, np.ndarray]:
@@ -424,29 +427,20 @@ class ArmModel:
         """
         return ToolJacobian(self._walk(np.asarray(q, dtype=float), tail, jacobian=True))
 
-    def _walk(self, q: np.ndarray, tail: np.ndarray | None, jacobian: bool) -> np.ndarray:
+    def chain(self, tail: np.ndarray | None = None) -> Chain:
+        """
+        Return the chain as the kernels take it (``forward.Chain``).
+
+        Without ``tail``, every joint is walked to the tool; with ``tail`` (from ``held_tail``),
+        only the planned ones, to the tool point and axis ``tail`` in frame ``planned``.
+        """
         if tail is None:
-            vec = self._chain(q, self.n_joints, 0, self._tail, jacobian)
-        else:
-            vec = self._chain(q, self.planned, 0, tail, jacobian)
-        if self._moved_base:
-            vec = _rotated(self.base[:3, :3], vec)
-            vec[0] += self.base[:3, 3]
-        return vec
+            return self._chain
+        return self._chain._replace(tail=np.ascontiguousarray(tail, dtype=float),
+                                    top=self.planned)
 
-    def _chain(self, q: np.ndarray, top: int, bottom: int, tail: np.ndarray,
-               jacobian: bool) -> np.ndarray:
-        """
-        Walk joints top-1 .. bottom from frame ``top`` towards the base (B is left to _walk).
-
-        ``forward.walk_chain`` (compiled): ``tail`` (2, 3) is the tool point and axis in frame
-        ``top``; returns rows (rows, N, 3) of the tool point, the tool axis and, with
-        ``jacobian``, per planned joint i its derivatives and signed axis (rows 2 + 3i .. 4 + 3i).
-        q: (N, top) joint angles; columns bottom..top-1 are used.
-        """
-        return walk_chain(np.ascontiguousarray(q, dtype=float), self.sign, self.offset,
-                          self.rotations, self.translations, self._kinds, top, bottom,
-                          np.ascontiguousarray(tail, dtype=float), self.planned, jacobian)
+    def _walk(self, q: np.ndarray, tail: np.ndarray | None, jacobian: bool) -> np.ndarray:
+        return tool_rows(self.chain(tail), np.ascontiguousarray(q, dtype=float), jacobian)
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """
@@ -465,8 +459,3 @@ class ArmModel:
             out[:, i + 1] = out[:, i] @ turn[:, i] @ link[i]
         out[:, -1, :3, 3] += out[:, -1, :3, :3] @ self.tool_point
         return out
-
-
-def _rotated(r: np.ndarray, vec: np.ndarray) -> np.ndarray:
-    """Return vectors (..., 3) turned by the rotation r (3, 3), as one matrix product."""
-    return (vec.reshape(-1, 3) @ r.T).reshape(vec.shape)

@@ -10,16 +10,21 @@ columns of joint i are born in its own frame, after its turn, as z x (tool point
 axis) and z itself, each times sign_i, and are then turned with everything else. A link
 rotation is applied by its kind: none, about x only (every DH link: alpha_i), or in general.
 
+``tool_rows`` walks a ``Chain`` (an arm's arrays as the kernels take them) and turns the result
+into the base frame B.
+
 ``chain_hessian`` takes the second derivatives from those columns: joint i turns every column
 of a joint j after it about its axis Z_i, so d2/dq_i dq_j = Z_i x (column j) for i <= j.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
 
-__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'chain_hessian', 'walk_chain']
+__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'Chain', 'chain_hessian', 'tool_rows', 'walk_chain']
 
 #: How a link rotation is applied: skipped, as a rotation about x, or as a 3x3 product.
 IDENTITY, ABOUT_X, GENERAL = 0, 1, 2
@@ -80,6 +85,41 @@ def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: n
                 v[col + 2, 2] = sign[i]
                 live = rows
         out[:, k, :] = v
+    return out
+
+
+class Chain(NamedTuple):
+    """A serial chain as the kernels take it (``ArmModel.chain``); angles of joints < ``top``."""
+
+    sign: np.ndarray            # (n,) +-1
+    offset: np.ndarray          # (n,) rad
+    rotations: np.ndarray       # (n, 3, 3) the link rotations
+    translations: np.ndarray    # (n, 3) the link translations
+    kinds: np.ndarray           # (n,) how each rotation is applied: IDENTITY, ABOUT_X, GENERAL
+    tail: np.ndarray            # (2, 3) the tool point and axis in frame ``top``
+    base: np.ndarray            # (4, 4) B, the first joint's frame in the base frame
+    top: int                    # the joints walked: 0 .. top - 1
+    planned: int                # the joints with Jacobian columns: 0 .. planned - 1
+
+
+@kernel
+def tool_rows(chain: Chain, q: np.ndarray, jacobian: bool) -> np.ndarray:
+    """
+    Return ``walk_chain``'s rows (rows, N, 3) for q (N, >= top), in the base frame B.
+
+    Every row is turned by B's rotation, and the tool point moved by its translation.
+    """
+    out = walk_chain(q, chain.sign, chain.offset, chain.rotations, chain.translations,
+                     chain.kinds, chain.top, 0, chain.tail, chain.planned, jacobian)
+    r, t = chain.base[:3, :3], chain.base[:3, 3]
+    for m in range(out.shape[0]):
+        for k in range(out.shape[1]):
+            x, y, z = out[m, k, 0], out[m, k, 1], out[m, k, 2]
+            for a in range(3):
+                out[m, k, a] = r[a, 0] * x + r[a, 1] * y + r[a, 2] * z
+    for k in range(out.shape[1]):
+        for a in range(3):
+            out[0, k, a] += t[a]
     return out
 
 

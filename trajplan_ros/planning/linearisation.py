@@ -29,7 +29,7 @@ import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
 
-__all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps']
+__all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps', 'solution_model']
 
 
 @kernel
@@ -309,11 +309,20 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
             norm += c[k, a] * c[k, a]
         time[k] = largest / omega
         merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
+    pinv, null, quad = solution_model(jac, hessian, across, free)
+    return c, time, merit, pinv, null, quad
+
+
+@kernel
+def solution_model(jac: np.ndarray, hessian: np.ndarray, across: np.ndarray, free: int
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return J^+, N and Q (see ``linearise``) from the Jacobians jac (K, 3 + h, planned)."""
+    count, dim = jac.shape[0], jac.shape[2]
     pinv = damped_pseudo_inverses(jac)
     if free == 0:
-        return c, time, merit, pinv, np.zeros((count, 0, dim)), np.zeros((count, 0, 0, dim))
+        return pinv, np.zeros((count, 0, dim)), np.zeros((count, 0, 0, dim))
     null = null_bases(jac, pinv, free)
-    return c, time, merit, pinv, null, solutions_curvatures(hessian, null, pinv, across)
+    return pinv, null, solutions_curvatures(hessian, null, pinv, across)
 
 
 @kernel

@@ -31,9 +31,11 @@ import functools
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
+from trajplan_ros.kinematics.forward import tool_rows
+from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.fuzzy import RewardPunishment
 
-__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'goal_ray_basis']
+__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'errors_eq11', 'goal_ray_basis']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -73,6 +75,33 @@ def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
     size = np.linalg.norm(across)
     across = across / size if size > 1e-12 else np.array([1.0, 0.0, 0.0])
     return np.stack((ray, across, np.cross(ray, across)))
+
+
+@kernel
+def errors_eq11(p: np.ndarray, u: np.ndarray, goal: np.ndarray, ray: np.ndarray, held: int,
+                reach: float) -> np.ndarray:
+    """
+    Return the error of eq. (11) at tool points p and axes u (N, 3), plus the axis's.
+
+    ``ray``: the goal ray and two unit vectors across it (rows); ``held``: how many of those
+    the constraints hold (``Objective.across_basis``). With both, the error adds (L angle)^2,
+    the angle between u and the ray; with one, (L asin |u . across|)^2, u's angle from the
+    plane that leaves it; L = ``reach``.
+    """
+    out = np.empty(p.shape[0])
+    for k in range(p.shape[0]):
+        sq = 0.0
+        for a in range(3):
+            sq += (p[k, a] - goal[a]) ** 2
+        along = u[k, 0] * ray[0, 0] + u[k, 1] * ray[0, 1] + u[k, 2] * ray[0, 2]
+        side = u[k, 0] * ray[1, 0] + u[k, 1] * ray[1, 1] + u[k, 2] * ray[1, 2]
+        up = u[k, 0] * ray[2, 0] + u[k, 1] * ray[2, 1] + u[k, 2] * ray[2, 2]
+        if held == 2:
+            sq += (reach * np.arctan2(np.hypot(side, up), along)) ** 2
+        elif held == 1:
+            sq += (reach * np.arcsin(min(abs(side), 1.0))) ** 2
+        out[k] = np.sqrt(sq)
+    return out
 
 
 class Objective:
@@ -128,6 +157,8 @@ class Objective:
         #: than both, the solutions are the larger sets that ``solution_curve`` follows.
         self.across_basis = self.ray_basis[1: 1 + across] if self.radial else np.empty((0, 3))
         self._tail = arm.held_tail(self.start)
+        #: The planned joints' chain as the kernels take it, the held ones at their start.
+        self.chain = arm.chain(self._tail)
 
     @property
     def radial(self) -> bool:
@@ -177,11 +208,12 @@ class Objective:
 
     def tool(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return tool position and axis (N, 3) for planned-joint vectors x (N, planned)."""
-        return self.arm.tool(x, tail=self._tail)
+        rows = tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), False)
+        return rows[0], rows[1]
 
     def tool_jacobian(self, x: np.ndarray) -> ToolJacobian:
         """Return ``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned)."""
-        return self.arm.tool_jacobian(x, tail=self._tail)
+        return ToolJacobian(tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), True))
 
     def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
         """
@@ -213,14 +245,8 @@ class Objective:
         With one component held across the goal ray (``across``), the angle of u from the plane
         that leaves it; with none, the position error alone.
         """
-        d = p - self.goal
-        sq = np.einsum('ij,ij->i', d, d)
-        if self.radial and len(self.across_basis) == 2:
-            sq = sq + (self.arm.reach * self.axis_angle(u)) ** 2
-        elif self.radial and len(self.across_basis):
-            off = np.arcsin(np.minimum(np.abs(u @ self.across_basis[0]), 1.0))
-            sq = sq + (self.arm.reach * off) ** 2
-        return np.sqrt(sq)
+        return errors_eq11(np.ascontiguousarray(p), np.ascontiguousarray(u), self.goal,
+                           self.ray_basis, len(self.across_basis), self.arm.reach)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
         """Return R of eq. (10), max_i |x_i - start_i| / omega_i, for x (N, planned)."""

@@ -18,7 +18,7 @@ them all:
    one vectorised walk;
 3. the seeds are the samples where the motion time is no larger than at their neighbours, among
    the samples inside the limits, the points where the curve enters or leaves the limits
-   (``_limit_crossings``, so that an arc shorter than a step and an optimum on a limit are not
+   (``limit_crossings``, so that an arc shorter than a step and an optimum on a limit are not
    missed) and the samples just outside a limit that are nearer to it than their neighbours,
    moved onto it (a curve that only touches a limit). The curve through the answer so far is
    also sampled ten times as finely near it: two minima can lie closer together than a step
@@ -36,10 +36,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trajplan_ros.planning.objective import Mode, Objective
-from trajplan_ros.planning.polish import Linearisation
+from trajplan_ros.kinematics.forward import Chain, chain_hessian, tool_rows
+from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
+                                                 residuals_and_jacobians, solution_model)
+from trajplan_ros.planning.objective import errors_eq11, Mode, Objective
 
-__all__ = ['curve_constraint', 'curve_seeds', 'follow', 'project']
+__all__ = ['curve_constraint', 'curve_seeds', 'distinct', 'follow', 'limit_crossings',
+           'lowest_time', 'neighbours', 'points_on_curves', 'project', 'seeds_on_curves', 'trace',
+           'wrap_into', 'curve_keys', 'distinct_by_spacing', 'snap_to_limits']
 
 
 def curve_constraint(obj: Objective) -> Objective | None:
@@ -61,28 +66,86 @@ def curve_constraint(obj: Objective) -> Objective | None:
     return None
 
 
-def _wrap(q: np.ndarray) -> np.ndarray:
-    return np.mod(q + np.pi, 2 * np.pi) - np.pi
+@kernel
+def wrap_into(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Wrap angles q (N, m) to [-pi, pi), or to the box on joints whose box is a whole turn."""
+    for i in range(q.shape[1]):
+        turn = upper[i] - lower[i] >= 2.0 * np.pi - 1e-12
+        centre = 0.5 * (lower[i] + upper[i]) if turn else 0.0
+        for k in range(q.shape[0]):
+            q[k, i] = centre + (q[k, i] - centre + np.pi) % (2.0 * np.pi) - np.pi
 
 
-def _wrap_into(curve: Objective, q: np.ndarray) -> np.ndarray:
-    """Wrap angles to [-pi, pi), or to the search box on joints whose box is a whole turn."""
-    turn = curve.upper - curve.lower >= 2.0 * np.pi - 1e-12
-    centre = np.where(turn, 0.5 * (curve.lower + curve.upper), 0.0)
-    return centre + _wrap(q - centre)
+@kernel
+def newton_steps(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
+                 upper: np.ndarray, x: np.ndarray, steps: int) -> np.ndarray:
+    """Return x (K, m) after ``steps`` minimum-norm Newton steps, wrapped (``project``)."""
+    x = x.copy()
+    unbounded = np.full(x.shape[0], np.inf)
+    for _ in range(steps):
+        c, jac = residuals_and_jacobians(tool_rows(chain, x, True), goal, across)
+        x += minimum_norm_steps(damped_pseudo_inverses(jac), c, unbounded)
+        wrap_into(x, lower, upper)
+    return x
+
+
+@kernel
+def _curve_model(chain: Chain, goal: np.ndarray, across: np.ndarray, x: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return c, J^+, the null direction and half the solutions' curvature along it at x."""
+    rows = tool_rows(chain, x, True)
+    c, jac = residuals_and_jacobians(rows, goal, across)
+    pinv, null, quad = solution_model(jac, chain_hessian(rows), across, 1)
+    return c, pinv, null[:, 0, :], quad[:, 0, 0, :]
+
+
+@kernel
+def trace(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
+          upper: np.ndarray, x: np.ndarray, step: np.ndarray, steps: int) -> np.ndarray:
+    """
+    Return the curves of solutions through the rows of x (K, m), (K, 2 steps + 1, m) (``follow``).
+
+    Each way from each row (the null direction, then its opposite): a step of ``step`` (K,)
+    along the tangent and the curvature, then one Newton correction, the tangent's sign kept
+    along the way; the samples wrapped (``wrap_into``), the walk itself not.
+    """
+    k, dim = x.shape
+    ends = np.concatenate((x, x))
+    unbounded = np.full(2 * k, np.inf)
+    c, pinv, null, bend = _curve_model(chain, goal, across, ends)
+    direction = null.copy()
+    direction[k:] *= -1.0
+    length = np.concatenate((step, step))
+    out = np.empty((k, 2 * steps + 1, dim))
+    out[:, steps] = x
+    for s in range(steps):
+        for r in range(2 * k):
+            for i in range(dim):
+                ends[r, i] += (direction[r, i] + bend[r, i] * length[r]) * length[r]
+        c, pinv, null, bend = _curve_model(chain, goal, across, ends)
+        ends += minimum_norm_steps(pinv, c, unbounded)
+        for r in range(2 * k):
+            turn = 0.0
+            for i in range(dim):
+                turn += null[r, i] * direction[r, i]
+            for i in range(dim):
+                direction[r, i] = null[r, i] * np.sign(turn)
+        sample = ends.copy()
+        wrap_into(sample, lower, upper)
+        out[:, steps + 1 + s] = sample[:k]
+        out[:, steps - 1 - s] = sample[k:]
+    return out
 
 
 def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     """
     Return x (K, planned) moved towards the solutions of ``curve`` by minimum-norm Newton steps.
 
-    The limits are ignored and angles wrapped (``_wrap_into``). Rows that have not converged yet
+    The limits are ignored and angles wrapped (``wrap_into``). Rows that have not converged yet
     carry on converging in ``follow``, which corrects every step.
     """
-    for _ in range(steps):
-        here = Linearisation(curve, x, 1.0, newton_only=True)
-        x = _wrap_into(curve, x + here.newton(here.c))
-    return x
+    return newton_steps(curve.chain, curve.goal, curve.across_basis, curve.lower, curve.upper,
+                        np.ascontiguousarray(x, dtype=float), steps)
 
 
 def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
@@ -93,61 +156,57 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
     Returns (K, 2 steps + 1, planned): each curve in order, with its row of x in the middle.
     ``steps`` predictor-corrector steps of ``step`` rad (one for all rows, or one per row) each
     way (a step along the tangent and the curvature of the solutions, then one Newton
-    correction), straight through the joint limits (angles wrapped, ``_wrap_into``).
+    correction), straight through the joint limits (angles wrapped, ``wrap_into``).
     """
-    k = x.shape[0]
-    ends = np.concatenate((x, x))
-    here = Linearisation(curve, ends, 1.0)
-    direction = here.null[:, 0, :] * np.repeat([1.0, -1.0], k)[:, None]    # both ways
-    length = np.tile(np.broadcast_to(step, (k,)), 2)[:, None]
-    path = []
-    for _ in range(steps):
-        ends = ends + (direction + here.quad[:, 0, 0, :] * length) * length
-        here = Linearisation(curve, ends, 1.0)
-        ends = ends + here.newton(here.c)
-        turn = np.sign(np.einsum('ki,ki->k', here.null[:, 0, :], direction))
-        direction = here.null[:, 0, :] * turn[:, None]
-        path.append(_wrap_into(curve, ends))
-    walk = np.stack(path, axis=1)                                    # (2K, steps, planned)
-    return np.concatenate((walk[k:, ::-1], x[:, None, :], walk[:k]), axis=1)
+    x = np.ascontiguousarray(x, dtype=float)
+    step = np.ascontiguousarray(np.broadcast_to(step, (x.shape[0],)), dtype=float)
+    return trace(curve.chain, curve.goal, curve.across_basis, curve.lower, curve.upper, x, step,
+                 steps)
 
 
-def _limit_crossings(obj: Objective, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+@kernel
+def limit_crossings(lower: np.ndarray, upper: np.ndarray, a: np.ndarray, b: np.ndarray
+                    ) -> np.ndarray:
     """
-    Return where the chords a -> b enter and leave the joint limits, (3, K, planned).
+    Return where the chords a -> b (K, m) enter and leave the joint limits, (3, K, m).
 
     The chord runs from a to a + wrap(b - a); NaN rows where it misses the limits. The third
     point is, for a chord that misses them by less than 0.1 rad, its point nearest to them
     (of nine along it), moved onto them: the curve bends away from its chords, and the part of
     an arc inside the limits can be shorter than a chord's miss (in a corner of the limits).
     """
-    d = _wrap(b - a)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        t_lo, t_hi = (obj.lower - a) / d, (obj.upper - a) / d
-    moving = d != 0.0
-    inside = (a >= obj.lower) & (a <= obj.upper)
-    enter = np.where(moving, np.fmin(t_lo, t_hi), np.where(inside, -np.inf, np.inf)).max(axis=1)
-    leave = np.where(moving, np.fmax(t_lo, t_hi), np.where(inside, np.inf, -np.inf)).min(axis=1)
-    enter, leave = np.maximum(enter, 0.0), np.minimum(leave, 1.0)
-    t = np.where(enter <= leave, np.stack((enter, leave)), np.nan)
-    along = a[:, None, :] + np.linspace(0.0, 1.0, 9)[None, :, None] * d[:, None, :]
-    miss = np.maximum(obj.lower - along, along - obj.upper).max(axis=2)          # (K, 9)
-    nearest = np.argmin(miss, axis=1)
-    gap = miss[np.arange(len(a)), nearest]
-    t = np.concatenate((t, np.where((enter > leave) & (gap < 0.1), nearest / 8.0, np.nan)[None]))
-    return np.clip(a + t[:, :, None] * d, obj.lower, obj.upper)
-
-
-def _distinct(points: np.ndarray, radius: float) -> np.ndarray:
-    """
-    Return the points, best first, that are ``radius`` (max-norm) or farther from every better one.
-
-    The first of each grid cell of size ``radius`` is kept first (cheap), then the pairs.
-    """
-    _, first = np.unique(np.floor(points / radius), axis=0, return_index=True)
-    points = points[np.sort(first)]
-    near = np.max(np.abs(points[:, None, :] - points[None, :, :]), axis=2) < radius
-    return points[~np.any(np.tril(near, -1), axis=1)]
+    count, dim = a.shape
+    out = np.full((3, count, dim), np.nan)
+    d = np.empty(dim)
+    t = np.empty(3)
+    for k in range(count):
+        enter, leave = -np.inf, np.inf
+        for i in range(dim):
+            d[i] = (b[k, i] - a[k, i] + np.pi) % (2.0 * np.pi) - np.pi
+            if d[i] != 0.0:
+                t_lo, t_hi = (lower[i] - a[k, i]) / d[i], (upper[i] - a[k, i]) / d[i]
+                enter, leave = max(enter, min(t_lo, t_hi)), min(leave, max(t_lo, t_hi))
+            elif not lower[i] <= a[k, i] <= upper[i]:
+                enter, leave = np.inf, -np.inf
+        missed = max(enter, 0.0) > min(leave, 1.0)
+        t[0], t[1], t[2] = max(enter, 0.0), min(leave, 1.0), np.nan
+        if missed:
+            t[0] = t[1] = np.nan
+            gap, nearest = np.inf, 0
+            for j in range(9):
+                miss = -np.inf
+                for i in range(dim):
+                    at = a[k, i] + j / 8.0 * d[i]
+                    miss = max(miss, lower[i] - at, at - upper[i])
+                if miss < gap:
+                    gap, nearest = miss, j
+            if gap < 0.1:
+                t[2] = nearest / 8.0
+        for e in range(3):
+            if not np.isnan(t[e]):
+                for i in range(dim):
+                    out[e, k, i] = min(max(a[k, i] + t[e] * d[i], lower[i]), upper[i])
+    return out
 
 
 class _Walk(NamedTuple):
@@ -166,70 +225,90 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     Return the points along the curves through the probes (``_Walk``).
 
     Each curve in order: a sample, where the chord to the next one enters the limits, where it
-    leaves them, where it nearly meets them (``_limit_crossings``), the next sample, and so on.
+    leaves them, where it nearly meets them (``limit_crossings``), the next sample, and so on.
     A sample outside the limits that is nearer to them than both its neighbours is moved onto
     them. Points outside the limits or farther than 5e-2 of the reach from the solutions (the
     points moved onto the limits can be that far) are NaN.
     """
     along = follow(curve, project(curve, probes), step, steps)              # (K, S, planned)
-    k, _, dim = along.shape
+    return _Walk(*points_on_curves(curve.chain, curve.goal, curve.across_basis, curve.ray_basis,
+                                   obj.arm.reach, obj.lower, obj.upper, along))
+
+
+@kernel
+def snap_to_limits(along: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Move samples (K, S, m) onto the limits where they are just outside (``_on_curves``)."""
+    k, count, dim = along.shape
     # on a limit, not outside it by a rounding error (a curve can lie on a limit: the base
     # joint's angle is the same all along it)
-    snap = np.clip(along, obj.lower, obj.upper)
-    along = np.where(np.abs(along - snap) <= 1e-9, snap, along)
+    outside = np.empty((k, count))
+    for r in range(k):
+        for s in range(count):
+            outside[r, s] = -np.inf
+            for i in range(dim):
+                snap = min(max(along[r, s, i], lower[i]), upper[i])
+                if abs(along[r, s, i] - snap) <= 1e-9:
+                    along[r, s, i] = snap
+                outside[r, s] = max(outside[r, s], lower[i] - along[r, s, i],
+                                    along[r, s, i] - upper[i])
     # a sample outside the limits but nearer than both neighbours: where the curve may just
     # touch a limit from outside (a solution set of one point) or dip back in between samples
-    outside = np.maximum(obj.lower - along, along - obj.upper).max(axis=2)
-    padded = np.pad(outside, ((0, 0), (1, 1)), constant_values=np.inf)
-    touch = (outside > 0) & (outside <= padded[:, :-2]) & (outside <= padded[:, 2:])
-    along = np.where(touch[:, :, None], snap, along)
-    ends = _limit_crossings(obj, along[:, :-1].reshape(-1, dim), along[:, 1:].reshape(-1, dim))
-    crossings = ends.reshape(3, k, -1, dim).transpose(1, 2, 0, 3)
-    points = np.concatenate((along[:, :-1, None], crossings), axis=2).reshape(k, -1, dim)
-    flat = np.concatenate((points, along[:, -1:]), axis=1).reshape(-1, dim)
-    present = np.ones(flat.shape[0], dtype=bool).reshape(k, -1)
-    present[:, :-1] = ~np.isnan(points[:, :, 0]) | (np.arange(points.shape[1]) % 4 == 0)
-    valid = np.all((flat >= obj.lower) & (flat <= obj.upper), axis=1)      # NaN rows: False
-    p, u = curve.tool(np.where(valid[:, None], flat, 0.0))
-    valid &= curve.errors(p, u) <= 5e-2 * obj.arm.reach
-    return _Walk(np.where(valid[:, None], flat, np.nan).reshape(k, -1, dim), along, present, u)
+    for r in range(k):
+        for s in range(count):
+            before = outside[r, s - 1] if s > 0 else np.inf
+            after = outside[r, s + 1] if s + 1 < count else np.inf
+            if 0.0 < outside[r, s] <= min(before, after):
+                for i in range(dim):
+                    along[r, s, i] = min(max(along[r, s, i], lower[i]), upper[i])
 
 
-def _neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+@kernel
+def points_on_curves(chain: Chain, goal: np.ndarray, across: np.ndarray, ray: np.ndarray,
+                     reach: float, lower: np.ndarray, upper: np.ndarray, along: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
-    Return the index of the nearest present point before and after each point, (K, L) each.
+    Return ``_Walk``'s points, samples, present and axis for the samples ``along`` (K, S, m).
 
-    -1 where there is none before, L where there is none after.
+    See ``_on_curves``; ``along`` is changed in place (samples snapped onto the limits).
     """
-    count = present.shape[1]
-    index = np.broadcast_to(np.arange(count), present.shape)
-    before = np.maximum.accumulate(np.where(present, index, -1), axis=1)
-    after = np.minimum.accumulate(np.where(present, index, count)[:, ::-1], axis=1)[:, ::-1]
-    edge = np.full((len(present), 1), 1)
-    return (np.concatenate((-edge, before[:, :-1]), axis=1),
-            np.concatenate((after[:, 1:], count * edge), axis=1))
-
-
-def _lowest_time(obj: Objective, samples: np.ndarray, spacing: np.ndarray) -> np.ndarray:
-    """
-    Return a lower bound of R near each point of ``_on_curves``, (K, L), from its samples.
-
-    Between two neighbouring samples each joint is taken to move monotonically, give or take a
-    tenth of the sample spacing (the curve bends between samples): its displacement is then no
-    smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
-    displacement over its joint's omega_i. A sample is bounded over the stretches on either side
-    of it, a point between two samples over theirs.
-    """
-    moved = (samples - obj.start[: samples.shape[2]]) * obj.time_scale
-    a, b = moved[:, :-1], moved[:, 1:]
-    least = np.where(a * b <= 0.0, 0.0, np.minimum(np.abs(a), np.abs(b)))
-    slack = 0.1 * spacing[:, None] * obj.time_scale.max()
-    stretch = (np.max(least, axis=2) - slack) / obj.omega                          # (K, S - 1)
-    padded = np.pad(stretch, ((0, 0), (1, 1)), constant_values=np.inf)
-    at_samples = np.minimum(padded[:, :-1], padded[:, 1:])                       # (K, S)
-    between = np.repeat(stretch, 3, axis=1).reshape(len(samples), -1, 3)
-    points = np.concatenate((at_samples[:, :-1, None], between), axis=2).reshape(len(samples), -1)
-    return np.concatenate((points, at_samples[:, -1:]), axis=1)
+    k, count, dim = along.shape
+    snap_to_limits(along, lower, upper)
+    chords = (count - 1) * k
+    ends = limit_crossings(lower, upper, along[:, :-1].copy().reshape((chords, dim)),
+                           along[:, 1:].copy().reshape((chords, dim)))
+    size = 4 * (count - 1) + 1
+    points = np.empty((k, size, dim))
+    present = np.ones((k, size), dtype=np.bool_)
+    for r in range(k):
+        for s in range(count - 1):
+            points[r, 4 * s] = along[r, s]
+            for e in range(3):
+                points[r, 4 * s + 1 + e] = ends[e, r * (count - 1) + s]
+                present[r, 4 * s + 1 + e] = not np.isnan(ends[e, r * (count - 1) + s, 0])
+        points[r, size - 1] = along[r, count - 1]
+    inside = np.empty(k * size, dtype=np.int64)        # the points inside the limits
+    count_inside = 0
+    for j in range(k * size):
+        valid = True
+        for i in range(dim):
+            valid &= lower[i] <= points[j // size, j % size, i] <= upper[i]     # NaN: False
+        if valid:
+            inside[count_inside] = j
+            count_inside += 1
+        else:
+            points[j // size, j % size] = np.nan
+    flat = np.empty((count_inside, dim))
+    for n in range(count_inside):
+        flat[n] = points[inside[n] // size, inside[n] % size]
+    rows = tool_rows(chain, flat, False)
+    error = errors_eq11(rows[0], rows[1], goal, ray, across.shape[0], reach)
+    axis = np.zeros((k * size, 3))
+    for n in range(count_inside):
+        j = inside[n]
+        axis[j] = rows[1, n]
+        if not error[n] <= 5e-2 * reach:
+            points[j // size, j % size] = np.nan
+    return points, along, present, axis
 
 
 def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
@@ -240,7 +319,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     ``probes`` (K, planned) need not be solutions; none are returned where there is no curve.
     ``best`` is the answer so far (None when it does not reach the goal). Its curve is also
     sampled every ``fine`` rad near it, for minima closer to it than a ``step``. A seed is kept
-    only if a faster solution than ``best`` may lie between its neighbours (``_lowest_time``),
+    only if a faster solution than ``best`` may lie between its neighbours (``lowest_time``),
     and not within half a sample of ``best``. Of seeds within half a sample of each other only
     the best is kept (the same minimum, reached along the curves through different probes).
     On the fine samples of the curves of fewer axis conditions the
@@ -254,29 +333,197 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
     spacing = np.full(len(probes), step)
     if best is not None:
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
-    points, samples, present, axis = _on_curves(obj, curve, probes, spacing, steps)
-    flat = points.reshape(-1, probes.shape[1])
-    usable = ~np.isnan(flat[:, 0])
-    q = np.where(usable[:, None], flat, 0.0)
-    time = np.where(usable, obj.motion_time(q), np.inf).reshape(points.shape[:2])
-    if curve is obj:             # least time, then least travel (a tied stretch has one minimum)
-        travel = np.abs(q - obj.start[: q.shape[1]]).sum(axis=1).reshape(time.shape)
-        key = time + 1e-6 * travel / obj.omega
-    else:
-        key = np.where(usable, obj.axis_angle(axis), np.inf).reshape(time.shape)
-    before, after = _neighbours(present)
-    padded = np.pad(key, ((0, 0), (0, 1)), constant_values=np.inf)      # index -1 and L: inf
-    minima = (np.isfinite(key) & (key <= np.take_along_axis(padded, before, axis=1))
-              & (key <= np.take_along_axis(padded, after, axis=1)))
-    if best is not None:
-        if curve is not obj:     # two radial solutions can lie within a fine sample (a fold)
-            last = np.flatnonzero(minima[-1])
-            minima[-1, before[-1, last][before[-1, last] >= 0]] = True
-            minima[-1, after[-1, last][after[-1, last] < key.shape[1]]] = True
-            minima[-1] &= np.isfinite(key[-1])
-        minima &= _lowest_time(obj, samples, spacing) < obj.motion_time(best[None, :])[0]
-        minima &= np.max(np.abs(points - best), axis=2) >= spacing[:, None] / 2
-    groups = [(minima[spacing == size], key[spacing == size], points[spacing == size], size)
-              for size in np.unique(spacing)]
-    return np.concatenate([_distinct(p[m][np.argsort(k[m], kind='stable')], size / 2)
-                           for m, k, p, size in groups])
+    walk = _on_curves(obj, curve, probes, spacing, steps)
+    best = np.full(probes.shape[1], np.nan) if best is None else best
+    return seeds_on_curves(*walk, spacing, obj.planned_start, obj.time_scale, obj.omega,
+                           obj.ray_basis, curve is obj, best)
+
+
+@kernel
+def neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the index of the nearest present point before and after each point, (K, L) each.
+
+    -1 where there is none before, L where there is none after.
+    """
+    k, count = present.shape
+    before, after = np.empty((k, count), np.int64), np.empty((k, count), np.int64)
+    for r in range(k):
+        last = -1
+        for j in range(count):
+            before[r, j] = last
+            if present[r, j]:
+                last = j
+        last = count
+        for j in range(count - 1, -1, -1):
+            after[r, j] = last
+            if present[r, j]:
+                last = j
+    return before, after
+
+
+@kernel
+def lowest_time(samples: np.ndarray, spacing: np.ndarray, start: np.ndarray,
+                scale: np.ndarray, omega: float) -> np.ndarray:
+    """
+    Return a lower bound of R near each point of ``_on_curves``, (K, L), from its samples.
+
+    Between two neighbouring samples each joint is taken to move monotonically, give or take a
+    tenth of the sample spacing (the curve bends between samples): its displacement is then no
+    smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
+    displacement over its joint's omega_i. A sample is bounded over the stretches on either side
+    of it, a point between two samples over theirs.
+    """
+    k, count, dim = samples.shape
+    stretch = np.empty((k, count - 1))
+    for r in range(k):
+        slack = 0.1 * spacing[r] * np.max(scale)
+        for s in range(count - 1):
+            largest = 0.0
+            for i in range(dim):
+                a = (samples[r, s, i] - start[i]) * scale[i]
+                b = (samples[r, s + 1, i] - start[i]) * scale[i]
+                if a * b > 0.0:
+                    largest = max(largest, min(abs(a), abs(b)))
+            stretch[r, s] = (largest - slack) / omega
+    out = np.empty((k, 4 * (count - 1) + 1))
+    for r in range(k):
+        for s in range(count):
+            before = stretch[r, s - 1] if s > 0 else np.inf
+            after = stretch[r, s] if s < count - 1 else np.inf
+            out[r, 4 * s] = min(before, after)
+            if s < count - 1:
+                out[r, 4 * s + 1: 4 * s + 4] = stretch[r, s]
+    return out
+
+
+@kernel
+def distinct(points: np.ndarray, radius: float) -> np.ndarray:
+    """
+    Return the points (n, m), best first, ``radius`` (max-norm) or farther from all better ones.
+
+    The first of each grid cell of size ``radius`` is kept first (cheap), then the pairs.
+    """
+    n, dim = points.shape
+    first = np.zeros(n, dtype=np.bool_)
+    for j in range(n):
+        first[j] = True
+        for e in range(j):
+            same = True
+            for i in range(dim):
+                same &= np.floor(points[j, i] / radius) == np.floor(points[e, i] / radius)
+            if same:
+                first[j] = False
+                break
+    kept = points[first]
+    keep = np.ones(kept.shape[0], dtype=np.bool_)
+    for j in range(kept.shape[0]):
+        for e in range(j):
+            if np.max(np.abs(kept[j] - kept[e])) < radius:
+                keep[j] = False
+                break
+    return kept[keep]
+
+
+@kernel
+def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, scale: np.ndarray,
+               omega: float, ray: np.ndarray, by_time: bool) -> np.ndarray:
+    """
+    Return what the seeds minimise at the points (K, L, m) along the curves; inf at NaN ones.
+
+    ``by_time``: the motion time R (eq. 10), plus 1e-6 of the travel (a tied stretch has one
+    minimum); else the angle between the tool ``axis`` (K L, 3) and the goal ray (``ray[0]``).
+    """
+    k, count, dim = points.shape
+    key = np.full((k, count), np.inf)
+    for r in range(k):
+        for j in range(count):
+            if np.isnan(points[r, j, 0]):
+                continue
+            if by_time:
+                largest, travel = 0.0, 0.0
+                for i in range(dim):
+                    moved = abs(points[r, j, i] - start[i])
+                    largest = max(largest, moved * scale[i])
+                    travel += moved
+                key[r, j] = largest / omega + 1e-6 * travel / omega
+            else:
+                u = axis[r * count + j]
+                along = u[0] * ray[0, 0] + u[1] * ray[0, 1] + u[2] * ray[0, 2]
+                side = u[0] * ray[1, 0] + u[1] * ray[1, 1] + u[2] * ray[1, 2]
+                up = u[0] * ray[2, 0] + u[1] * ray[2, 1] + u[2] * ray[2, 2]
+                key[r, j] = np.arctan2(np.hypot(side, up), along)
+    return key
+
+
+@kernel
+def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
+                        spacing: np.ndarray) -> np.ndarray:
+    """
+    Return the points (K, L, m) marked ``minima``, ``distinct`` within each sample spacing.
+
+    The finest spacing first, then the coarser; best (least ``key``) first within each.
+    """
+    k, count, dim = points.shape
+    found = []
+    for size in np.unique(spacing):      # finest first; best first within each
+        rows, keys = [], []
+        for r in range(k):
+            for j in range(count):
+                if spacing[r] == size and minima[r, j]:
+                    rows.append(points[r, j])
+                    keys.append(key[r, j])
+        group = np.empty((len(rows), dim))
+        for n, at in enumerate(np.argsort(np.array(keys, dtype=np.float64), kind='mergesort')):
+            group[n] = rows[at]
+        found.append(distinct(group, size / 2))
+    total = 0
+    for group in found:
+        total += group.shape[0]
+    out = np.empty((total, dim))
+    at = 0
+    for group in found:
+        out[at: at + group.shape[0]] = group
+        at += group.shape[0]
+    return out
+
+
+@kernel
+def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray,
+                    axis: np.ndarray, spacing: np.ndarray, start: np.ndarray, scale: np.ndarray,
+                    omega: float, ray: np.ndarray, by_time: bool, best: np.ndarray
+                    ) -> np.ndarray:
+    """
+    Return ``curve_seeds``'s seeds from the points along the curves (``_on_curves``).
+
+    ``by_time``: the minima of the motion time (then of the travel), else of the tool axis's
+    angle to the goal ray; ``best``: the answer so far (NaN: none).
+    """
+    k, count, dim = points.shape
+    key = curve_keys(points, axis, start, scale, omega, ray, by_time)
+    before, after = neighbours(present)
+    minima = np.zeros((k, count), dtype=np.bool_)
+    for r in range(k):
+        for j in range(count):
+            lo = key[r, before[r, j]] if before[r, j] >= 0 else np.inf
+            hi = key[r, after[r, j]] if after[r, j] < count else np.inf
+            minima[r, j] = np.isfinite(key[r, j]) and key[r, j] <= lo and key[r, j] <= hi
+    if not np.isnan(best[0]):
+        if not by_time:      # two radial solutions can lie within a fine sample (a fold)
+            last = minima[k - 1].copy()
+            for j in range(count):
+                if last[j] and before[k - 1, j] >= 0:
+                    minima[k - 1, before[k - 1, j]] = True
+                if last[j] and after[k - 1, j] < count:
+                    minima[k - 1, after[k - 1, j]] = True
+            for j in range(count):
+                minima[k - 1, j] &= np.isfinite(key[k - 1, j])
+        best_time = 0.0
+        for i in range(dim):
+            best_time = max(best_time, abs(best[i] - start[i]) * scale[i] / omega)
+        bound = lowest_time(samples, spacing, start, scale, omega)
+        for r in range(k):
+            for j in range(count):
+                minima[r, j] &= (bound[r, j] < best_time
+                                 and np.max(np.abs(points[r, j] - best)) >= spacing[r] / 2)
+    return distinct_by_spacing(points, key, minima, spacing)
