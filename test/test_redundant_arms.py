@@ -9,10 +9,10 @@ from scipy.optimize import linprog
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning import iepso as iepso_module, plan
-from trajplan_ros.planning.active_set import active_pieces, solve_augmented, sqp_steps
+from trajplan_ros.planning.active_set import (active_pieces, minimax_step, solve_augmented,
+                                              sqp_steps)
 from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import (_active_set_minimax, _active_sets, _LARGEST,
-                                          Linearisation, polish)
+from trajplan_ros.planning.polish import _active_sets, LARGEST, Linearisation, polish
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -20,6 +20,17 @@ from trajplan_ros.tools.bench.published_arms import PUBLISHED
 def published(name: str) -> ArmModel:
     arm = PUBLISHED[name]
     return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link)
+
+
+def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
+                        gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray,
+                        vertex_only: bool = False) -> np.ndarray:
+    """Return the polish's SQP step z (K, k) over the active sets, as ``trial_points`` takes it."""
+    k, m = null.shape[1:]
+    sets = _active_sets(min(m, k + LARGEST), k, vertex_only)
+    arrays = [np.ascontiguousarray(a, dtype=float)
+              for a in (b, null, quad, scale, gap_lo, gap_hi, limit)]
+    return minimax_step(*arrays, *sets)
 
 
 def drawn_goal(arm: ArmModel, rng: np.random.Generator) -> Objective:
@@ -49,7 +60,7 @@ def test_the_active_set_step_on_a_flat_model_is_the_linear_minimax(k: int, m: in
         best = linprog(np.eye(k + 1)[-1], A_ub=rows, b_ub=rhs, bounds=[(None, None)] * (k + 1))
         moved = np.abs(b[0] + best.x[:k] @ null[0]) * scale
         tying = np.flatnonzero(moved >= best.fun - 1e-9)
-        tried = np.argsort(-np.abs(b[0]) * scale)[: k + _LARGEST]           # the sets it tries
+        tried = np.argsort(-np.abs(b[0]) * scale)[: k + LARGEST]           # the sets it tries
         if (np.all(np.sign(b[0] + best.x[:k] @ null[0]) == np.sign(b[0]))
                 and np.isin(tying, tried).all() and tried[0] in tying):
             compared += 1
@@ -84,7 +95,7 @@ def test_the_flat_step_reaches_vertices_with_up_to_k_joints_on_a_limit(k: int, m
         limits = np.flatnonzero(np.abs(step - near) < 1e-9)
         tying = np.flatnonzero(np.abs(b[0] + step) * scale >= best.fun - 1e-9)
         nearest = np.argsort(np.minimum(hi[0], -lo[0]))[:k]
-        top = np.argsort(-np.abs(b[0]) * scale)[: k + _LARGEST]
+        top = np.argsort(-np.abs(b[0]) * scale)[: k + LARGEST]
         if (len(limits) == k and len(tying) == 1 and np.isin(limits, nearest).all()
                 and tying[0] == top[0] and tying[0] not in limits
                 and np.all(np.sign(b[0] + step) == np.sign(b[0]))):
@@ -119,7 +130,7 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     # a curved model of the solutions: the batched steps (a vertex set's k + 1 equations, the
     # other sets' KKT systems) against each set's KKT system solved on its own
     rng = np.random.default_rng(10 + k)
-    r = min(m, k + _LARGEST)
+    r = min(m, k + LARGEST)
     sets = _active_sets(r, k)
     pieces = sets.pieces
     ties = (pieces < r).astype(float)                                   # the joints' pieces
@@ -148,7 +159,7 @@ def test_the_step_is_the_best_of_the_sets_on_the_model(k: int, m: int) -> None:
     # kernel's choice is the least motion time among those whose linear part keeps within the
     # limits
     rng = np.random.default_rng(30 + k)
-    r = min(m, k + _LARGEST)
+    r = min(m, k + LARGEST)
     sets = _active_sets(r, k)
     null = np.stack([np.linalg.qr(rng.normal(size=(m, k)))[0].T for _ in range(8)])
     quad = rng.normal(0.0, 0.3, (8, k, k, m))

@@ -11,7 +11,7 @@ from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.planning.polish import Linearisation
 from trajplan_ros.planning.reference import exact_minimum
-from trajplan_ros.planning.solution_curve import (curve_constraint, curve_seeds, follow,
+from trajplan_ros.planning.solution_curve import (curve_constraint, curve_seeds, distinct, follow,
                                                   limit_crossings, project)
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
@@ -134,3 +134,16 @@ def test_seeds_are_in_limit_points_near_the_curves_and_distinct() -> None:
     goal6 = SIX.tool(np.full((1, 6), 0.3))[0][0]
     free6 = Objective(SIX, goal6, np.zeros(6))
     assert curve_seeds(free6, np.full((1, 6), 0.3), None).shape == (0, 6)
+
+
+def test_distinct_keeps_the_first_of_each_cell_then_the_best_of_near_pairs() -> None:
+    # against the same rule written with numpy: the first point of each grid cell (np.unique),
+    # then every point with no better one within the radius (max-norm)
+    rng = np.random.default_rng(4)
+    for dim, radius in ((2, 0.3), (4, 0.025), (7, 0.35)):
+        points = np.round(rng.uniform(-1, 1, (300, dim)), 1)         # repeats and ties
+        _, first = np.unique(np.floor(points / radius), axis=0, return_index=True)
+        kept = points[np.sort(first)]
+        near = np.max(np.abs(kept[:, None, :] - kept[None, :, :]), axis=2) < radius
+        expected = kept[~np.any(np.tril(near, -1), axis=1)]
+        np.testing.assert_array_equal(distinct(points, radius), expected)

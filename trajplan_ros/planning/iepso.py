@@ -70,7 +70,7 @@ Additions of ours, documented in the README, each on by default because it measu
   (``polish``); the least F when none is on the goal;
 * an ``interrupt`` (the planner's deadline and stop hook), if given, is asked at the end of
   every iteration and after every step of every polish (rounds, curve search, multi-start:
-  ``_or_interrupted``), and its reason ends the run with the best answer so far
+  ``polish``'s ``interrupt``), and its reason ends the run with the best answer so far
   (``OptimizeResult.interrupted``): a stop or a deadline waits at most one polish step, a few
   milliseconds on a 7-joint arm. Asking draws no random numbers, so a run it never ends is
   bit-identical;
@@ -85,7 +85,6 @@ measured figures use seeds that were not tuned on.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,7 +92,7 @@ import numpy as np
 from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
-from trajplan_ros.planning.polish import polish as polish_candidates, settle
+from trajplan_ros.planning.polish import agreeing, EarlyStop, polish as polish_candidates, settle
 from trajplan_ros.planning.solution_curve import curve_constraint, curve_seeds, project
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
@@ -158,10 +157,6 @@ SETTLED = 1e-14
 #: above ``SETTLED`` for many more steps while its motion time no longer changes.
 ON_GOAL = 1e-9
 
-#: The polish's early stop: called with each candidate's motion time, error and whether its
-#: steps are still accepted; True ends the polish round.
-_Enough = Callable[[np.ndarray, np.ndarray, np.ndarray], bool]
-
 
 @dataclass
 class _Swarms:
@@ -222,22 +217,18 @@ def _linear(bounds: tuple[float, float], frac: float) -> float:
 def _agreeing(motion_time: np.ndarray, error: np.ndarray, settled: float = SETTLED
               ) -> tuple[int, float]:
     """
-    Count the candidates that agree on the answer.
+    Count the candidates that agree on the answer (``polish.agreeing``).
 
     They have settled on the goal (error at most ``settled``) within 1e-6 of the best such
     motion time. Return their number and that best time (0 and inf when none has settled).
     """
-    reached = error <= settled
-    if not reached.any():
-        return 0, np.inf
-    best = motion_time[reached].min()
-    return int(np.count_nonzero(reached & (motion_time <= best * (1 + 1e-6)))), float(best)
+    return agreeing(motion_time, error, float(settled))
 
 
 def _polish_is_enough(agreement: int, near: float, active: float = ACTIVE_RADIUS,
-                      settled: float = SETTLED, faster: bool = True) -> _Enough:
+                      settled: float = SETTLED, faster: bool = True) -> EarlyStop:
     """
-    Build the early stop of one polish.
+    Build the early stop of one polish (``polish.early_stop``, compiled).
 
     Stop once ``agreement`` candidates agree (``_agreeing``, settled: error at most
     ``settled``) and no candidate still converging (its trust radius above ``active``, within
@@ -246,18 +237,7 @@ def _polish_is_enough(agreement: int, near: float, active: float = ACTIVE_RADIUS
     way to a faster solution), or a settled one within 1 % of their time whose time still went
     down in the last step (sliding along the solutions towards a minimum).
     """
-    previous: list[np.ndarray] = []
-
-    def enough(motion_time: np.ndarray, error: np.ndarray, radius: np.ndarray) -> bool:
-        sliding = (motion_time < previous[0] * (1 - 1e-12) if previous
-                   else np.ones(motion_time.shape, dtype=bool))
-        previous[:] = [motion_time.copy()]
-        agree, best_time = _agreeing(motion_time, error, settled)
-        settling = (error > settled) & ((motion_time < best_time) | (not faster))
-        sliding &= motion_time < best_time * 1.01
-        return agree >= agreement and not np.any(
-            (radius > active) & (error < near) & (settling | sliding))
-    return enough
+    return EarlyStop(int(agreement), float(near), float(active), float(settled), bool(faster))
 
 
 def _start(obj: Objective, rng: np.random.Generator, swarms: int, population: int,
@@ -334,7 +314,7 @@ def _round_members(swarm: _Swarms, rng: np.random.Generator, count: int) -> np.n
 
 
 def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, count: int,
-                  steps: int, enough: _Enough | None) -> Evaluation:
+                  steps: int, stop: EarlyStop, interrupt: Interrupt | None) -> Evaluation:
     """
     Polish each swarm's p_g and ``count - 1`` random members' p_i (ours).
 
@@ -343,7 +323,7 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
     """
     swarms, _, dim = swarm.x.shape
     refined = polish_candidates(obj, _round_members(swarm, rng, count), max_steps=steps,
-                                trust=ROUND_TRUST, enough=enough)
+                                trust=ROUND_TRUST, stop=stop, interrupt=interrupt)
     ev = obj(refined)
     refined_f = ev.efficiency.reshape(swarms, -1)
     pick = np.argmin(refined_f, axis=1)
@@ -359,8 +339,8 @@ def _polish_round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, coun
 def _round(swarm: _Swarms, obj: Objective, rng: np.random.Generator, stopping: _Stopping,
            count: int, steps: int, interrupt: Interrupt | None) -> tuple[bool, bool]:
     """Run a polish round and ask the stopping rule; return (stop, goal reached) (ours)."""
-    refined = _polish_round(swarm, obj, rng, count, steps, _or_interrupted(
-        _polish_is_enough(stopping.agreement, obj.arm.reach / 8), interrupt))
+    refined = _polish_round(swarm, obj, rng, count, steps,
+                            _polish_is_enough(stopping.agreement, obj.arm.reach / 8), interrupt)
     # F is hypersensitive to sub-nanometre errors (eq. 17's slope is 12 / s), so agreement is
     # judged on the motion time of the candidates settled on the goal
     agree, _ = _agreeing(refined.motion_time, refined.error)
@@ -430,9 +410,9 @@ def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, re
     seeds = curve_seeds(obj, points, best if reached else None)
     if not len(seeds):
         return seeds
-    enough = _or_interrupted(_polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL,
-                                               faster=False), interrupt)
-    return settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, enough=enough),
+    stop = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL, faster=False)
+    return settle(obj, polish_candidates(obj, seeds, max_steps=4 * steps, stop=stop,
+                                         interrupt=interrupt),
                   ON_GOAL)
 
 
@@ -452,21 +432,6 @@ class _Asked:
 def _cut_by(interrupt: _Asked | None) -> str | None:
     """Return why the interrupt has stopped the run (a polish was cut short), or None."""
     return None if interrupt is None else interrupt.reason
-
-
-def _or_interrupted(enough: _Enough | None, interrupt: Interrupt | None) -> _Enough | None:
-    """
-    Return ``enough`` that also ends the polish, at its next step, when ``interrupt`` stops.
-
-    A polish of many candidates runs for tens of milliseconds on a 7-joint arm: asking only
-    after each iteration would leave a stop or a deadline waiting that long.
-    """
-    if interrupt is None:
-        return enough
-
-    def ended(time: np.ndarray, error: np.ndarray, radius: np.ndarray) -> bool:
-        return interrupt() is not None or (enough is not None and enough(time, error, radius))
-    return ended
 
 
 def _by_multistart(obj: Objective) -> bool:
@@ -534,14 +499,14 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     trust = np.where(np.arange(len(points)) < len(bests), ROUND_TRUST, WIDE_TRUST)
     first = polish_candidates(obj, points, max_steps=steps, trust=trust,
                               prune=MULTISTART_PRUNED, vertex_steps=MULTISTART_VERTEX_STEPS,
-                              enough=_or_interrupted(None, interrupt))
+                              interrupt=interrupt)
     if asked(interrupt) is not None:
         return first
     ev = obj(first)
     order = np.lexsort((ev.motion_time, ev.error > FINISH_NEAR * obj.arm.reach))[:FINISHED]
-    enough = _or_interrupted(_polish_is_enough(1, obj.arm.reach / 8, active=0.0,
-                                               settled=ON_GOAL), interrupt)
-    finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS, enough=enough)
+    stop = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL)
+    finished = polish_candidates(obj, first[order], max_steps=FINISH_STEPS, stop=stop,
+                                 interrupt=interrupt)
     return settle(obj, np.concatenate((first, finished)), ON_GOAL)
 
 

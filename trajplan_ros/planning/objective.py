@@ -27,15 +27,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 import functools
+from typing import NamedTuple
 
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
-from trajplan_ros.kinematics.forward import tool_rows
+from trajplan_ros.kinematics.forward import Chain, tool_rows
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.fuzzy import RewardPunishment
 
-__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'errors_eq11', 'goal_ray_basis']
+__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
+           'goal_ray_basis']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -75,6 +77,21 @@ def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
     size = np.linalg.norm(across)
     across = across / size if size > 1e-12 else np.array([1.0, 0.0, 0.0])
     return np.stack((ray, across, np.cross(ray, across)))
+
+
+class Problem(NamedTuple):
+    """The kernels' view of an ``Objective``: its arrays, as one argument."""
+
+    chain: Chain            # the planned joints' chain, the held ones at their start
+    goal: np.ndarray        # (3,) m
+    across: np.ndarray      # (h, 3) the tool axis's components held at zero (``across_basis``)
+    ray: np.ndarray         # (3, 3) the goal ray and two vectors across it (``ray_basis``)
+    reach: float            # m, L of the error (``errors_eq11``)
+    start: np.ndarray       # (m,) the planned joints' start angles
+    scale: np.ndarray       # (m,) omega / omega_i
+    omega: float            # rad/s
+    lower: np.ndarray       # (m,) the search box
+    upper: np.ndarray       # (m,)
 
 
 @kernel
@@ -159,6 +176,10 @@ class Objective:
         self._tail = arm.held_tail(self.start)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
+        #: The objective's arrays as the kernels take them.
+        self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
+                               self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
+                               self.time_scale, self.omega, self.lower, self.upper)
 
     @property
     def radial(self) -> bool:

@@ -28,12 +28,12 @@ x(z) = x + z N + z^T Q z of the solutions (Q from the second derivatives along e
 null directions): each candidate active set (the joints tying with the largest displacement,
 chosen among the k + 2 largest, with any of the k nearest joint limits) gives a step: a
 vertex set (k + 1 pieces) by its equations, a smaller one by its KKT system, both in closed
-form where they are small (up to 3x3), compiled (``active_set``); the best on the model wins
-(``_active_set_minimax``). Near a
-minimum that is
-Newton's method on the right active set: it converges in a few steps where a coordinate
-descent along the null directions stalls on the ridge where joints tie. Ties are then broken
-only by the merit's travel term and by ``iepso._fastest`` among the candidates.
+form where they are small (up to 3x3), compiled (``active_set``); the best on the model wins.
+Near a minimum that is Newton's method on the right active set: it converges in a few steps
+where a coordinate descent along the null directions stalls on the ridge where joints tie.
+Ties are then broken only by the merit's travel term and by ``iepso._fastest`` among the
+candidates. Each step is one compiled kernel (``polish_step``): the trial points, their
+linearisation and the trust region's bookkeeping.
 
 A trust radius, a second-order correction (chord Newton steps, each within the trust radius:
 near a singular pose a chord step can be far longer than the step it corrects, and a
@@ -50,35 +50,38 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.arm import ToolJacobian
+from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
+from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.active_set import minimax_step
-from trajplan_ros.planning.linearisation import line_searches, linearise, minimum_norm_steps
-from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.linearisation import (line_searches, linearise, minimum_norm_steps,
+                                                 residuals_and_jacobians)
+from trajplan_ros.planning.objective import errors_eq11, Objective, Problem
 
-__all__ = ['Linearisation', 'polish', 'settle']
+__all__ = ['EarlyStop', 'Linearisation', 'NEVER', 'agreeing', 'early_stop', 'linearise_at',
+           'polish', 'polish_step', 'settle', 'trial_points']
 
-_TIE = 1e-12
-#: The active sets of ``_active_set_minimax`` tie the largest displacement with others among
-#: the k + _LARGEST largest, and include any of the k nearest limits (a vertex has k + 1
+TIE = 1e-12
+#: The active sets of the SQP step tie the largest displacement with others among the
+#: k + LARGEST largest, and include any of the k nearest limits (a vertex has k + 1
 #: pieces, at least one a joint's displacement: up to k can be limits; with two limits only,
 #: the Panda missed optima with one joint at the motion time and three on a limit).
-_LARGEST = 2
+LARGEST = 2
 #: On sets of 2+ dimensions: chord steps of the second-order correction, and the rejections
-#: in a row after which a candidate with an error (m) at most _CONVERGED_ERROR counts as
+#: in a row after which a candidate with an error (m) at most CONVERGED_ERROR counts as
 #: converged and leaves the batch.
-_CHORD_STEPS = 3
-_STALLED = 5
-_CONVERGED_ERROR = 1e-9
+CHORD_STEPS = 3
+STALLED = 5
+CONVERGED_ERROR = 1e-9
 #: Trust radius (rad) below which a candidate has converged: the motion time it could still
 #: gain is of the order of this radius over omega.
-_SMALLEST_RADIUS = 1e-9
+SMALLEST_RADIUS = 1e-9
 #: Weight of the total joint travel (rad) in the merit, beside omega R (rad): it decides only
 #: between steps that leave the motion time as it is (ties, see ``polish``).
-_TRAVEL_WEIGHT = 1e-6
+TRAVEL_WEIGHT = 1e-6
 
 
 class _ActiveSets(NamedTuple):
-    """The active sets that ``_active_set_minimax`` tries (``_active_sets``)."""
+    """The active sets that ``trial_points``'s SQP step tries (``_active_sets``)."""
 
     pieces: np.ndarray      # (C, k + 1): the pieces of each set
     vertex: np.ndarray      # (C,): the sets of k + 1 pieces, with no unused slot
@@ -90,7 +93,7 @@ class _ActiveSets(NamedTuple):
 @functools.lru_cache(maxsize=16)
 def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     """
-    Return the active sets that ``_active_set_minimax`` tries (``_ActiveSets``).
+    Return the active sets that ``trial_points``'s SQP step tries (``_ActiveSets``).
 
     Pieces 0..r-1 are the r largest joints' displacements, tying with the largest, pieces r to
     r + k - 1 the k limits nearest to the candidate, and r + k an unused slot. Every set of 1
@@ -104,70 +107,34 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     sets = [(*s, *w, *([unused] * (k + 1 - j - len(w))))
             for j in range(1, k + 2) for w in walls if j + len(w) <= k + 1
             for s in itertools.combinations(range(r), j) if s[0] == 0]
-    pieces = np.array([s for s in sets if not vertex_only or unused not in s])
+    pieces = np.array([s for s in sets if not vertex_only or unused not in s],
+                      dtype=np.int64).reshape(-1, k + 1)
     clashes = np.array([[t in s and r + w in s for s in pieces.tolist()]
                         for t in range(r) for w in range(k)], dtype=float)
+    clashes = clashes.reshape(r * k, len(pieces))
     return _ActiveSets(pieces, ~(pieces == unused).any(axis=1), clashes, r)
-
-
-def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
-                        gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray,
-                        vertex_only: bool = False) -> np.ndarray:
-    """
-    Return z (K, k) that minimises max_i scale_i |d_i(z)| on the quadratic model of the solutions.
-
-    d(z) = b + z N + z^T Q z (b (K, m): displacements; ``null`` (K, k, m): N, orthonormal rows;
-    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions; ``scale`` (m,)).
-    The steps keep the joints within [gap_lo, gap_hi] and ||z|| within ``limit`` (K,). The SQP
-    step of each active set (``_active_sets`` of the k + _LARGEST largest displacements) is
-    judged on the model, compiled (``active_set.minimax_step``); ``vertex_only``: the vertices
-    alone (cheaper).
-    """
-    k, m = null.shape[1:]
-    r = min(m, k + _LARGEST)
-    sets = _active_sets(r, k, vertex_only)
-    arrays = [np.ascontiguousarray(a, dtype=float)
-              for a in (b, null, quad, scale, gap_lo, gap_hi, limit)]
-    return minimax_step(*arrays, sets.pieces, sets.vertex, sets.clashes, r)
-
-
-def _residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
-    return obj.residuals(*obj.tool(x))
 
 
 class Linearisation:
     """
-    The constraints c(x) linearised at K candidates x, with what a polish step needs.
+    The constraints c(x) linearised at K candidates x, by name (``linearise_at``).
 
-    That is c, the motion time, the error, the merit, a pseudo-inverse of the constraint
-    Jacobian J, a basis of its null space and ``quad`` (K, k, k, planned): half the second
-    derivatives of the solution set along every pair of null directions, on its diagonal
-    x''/2 = -J^+ c''/2 along each direction n, with c'' the exact second derivative of c along n
-    (from ``ToolJacobian.hessian``). One compiled kernel computes them
-    (``linearisation.linearise``).
-
-    The pseudo-inverse comes from the damped normal equations, J^T (J J^T + mu I)^-1 (a few
-    small matrix products, much cheaper than an SVD per step and well behaved near
-    singularities); with one null direction (the usual case) it is the largest column of the
-    projector I - J^+ J; with more, the columns of a complete QR of J^T beyond its row count
-    (where J loses rank, that basis misses a null direction). The pairs off the diagonal of
-    ``quad`` serve the SQP step of two or more null directions (``_active_set_minimax``).
-    ``newton_only`` leaves the null space and the curvature out (both empty): all a Newton
+    That is c, the motion time, the merit, a pseudo-inverse of the constraint Jacobian J, a
+    basis of its null space, ``quad`` (K, k, k, planned): half the second derivatives of the
+    solution set along every pair of null directions (on its diagonal x''/2 = -J^+ c''/2 along
+    each direction n, with c'' the exact second derivative of c along n), and the error (eq.
+    11). ``newton_only`` leaves the null space and the curvature out (both empty): all a Newton
     step needs, for speed.
     """
+
+    _FIELDS = ('c', 'time', 'merit', 'pinv', 'null', 'quad', 'error')
 
     def __init__(self, obj: Objective, x: np.ndarray, weight: float,
                  newton_only: bool = False) -> None:
         x = np.ascontiguousarray(x, dtype=float)
-        d: ToolJacobian = obj.tool_jacobian(x)
-        planned, across = x.shape[1], obj.across_basis
-        free = 0 if newton_only else max(planned - 3 - len(across), 0)
-        hessian = d.hessian() if free else np.empty((0, planned, planned, 2, 3))
-        self.c, self.time, self.merit, self.pinv, self.null, self.quad = linearise(
-            d.rows, hessian, x, np.ascontiguousarray(obj.planned_start),
-            np.ascontiguousarray(obj.time_scale), obj.omega, np.ascontiguousarray(obj.goal),
-            np.ascontiguousarray(across), _TRAVEL_WEIGHT, float(weight), free)
-        self.error = obj.errors(d.p, d.u)
+        free = 0 if newton_only else max(x.shape[1] - 3 - len(obj.across_basis), 0)
+        (self.c, self.time, self.merit, self.pinv, self.null, self.quad,
+         self.error) = linearise_at(obj.problem, x, float(weight), free)
 
     def newton(self, res: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
         """
@@ -180,8 +147,6 @@ class Linearisation:
         return minimum_norm_steps(self.pinv, np.ascontiguousarray(res, dtype=float),
                                   np.ascontiguousarray(radius, dtype=float))
 
-    _FIELDS = ('c', 'time', 'error', 'merit', 'pinv', 'null', 'quad')
-
     def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
         """Take other's values where mask is true."""
         for name in self._FIELDS:
@@ -189,123 +154,217 @@ class Linearisation:
             np.copyto(mine, getattr(other, name),
                       where=mask.reshape(mask.shape + (1,) * (mine.ndim - 1)))
 
-    def take(self, mask: np.ndarray) -> None:
-        """Keep only the candidates where mask is true."""
-        for name in self._FIELDS:
-            setattr(self, name, getattr(self, name)[mask])
 
-
-def _null_step(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: np.ndarray,
-               scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, delta: np.ndarray,
-               vertex_only: bool) -> np.ndarray:
+class EarlyStop(NamedTuple):
     """
-    Return the candidates ``base`` (K, m) moved along the solutions to lower R (the SQP step).
+    When a polish may end before its last step (``early_stop``; see ``iepso``).
 
-    ``base``: the candidates after the Newton step; ``scale``: omega / omega_i; ``delta``: the
-    trust radii. The step is the quadratic model's (``_active_set_minimax``), clipped to the
-    joint limits.
+    Once ``agreement`` candidates agree (``agreeing``, settled: error at most ``settled``) and
+    no candidate still converging (its trust radius above ``active``, within ``near`` of the
+    goal) could beat their answer: one not yet settled that is faster (or, without ``faster``,
+    any one not yet settled), or a settled one within 1 % of their time whose time still went
+    down in the last step. ``agreement`` 0: never.
     """
-    z = _active_set_minimax(base - start, null, quad, scale, lo - base, hi - base, delta,
-                            vertex_only)
-    step = np.einsum('kj,kjm->km', z, null) + np.einsum('ka,kabm,kb->km', z, quad, z)
-    return np.clip(base + step, lo, hi)
+
+    agreement: int
+    near: float
+    active: float
+    settled: float
+    faster: bool
 
 
-def _line_searches(here: Linearisation, base: np.ndarray, start: np.ndarray,
-                   scale: np.ndarray, lo: np.ndarray, hi: np.ndarray, radius: np.ndarray
-                   ) -> np.ndarray:
+#: A polish that runs all its steps (or until every candidate has converged).
+NEVER = EarlyStop(0, 0.0, 0.0, 0.0, True)
+
+
+@kernel
+def agreeing(motion_time: np.ndarray, error: np.ndarray, settled: float) -> tuple[int, float]:
     """
-    Return ``base`` moved by the line searches along each null direction in turn.
+    Count the candidates that agree on the answer, and return that count and their time.
 
-    Each is the exact minimax of the joints' displacements, parabolas in the step, ties going
-    to the least total travel (``linearisation.line_searches``, compiled).
+    They have settled on the goal (error at most ``settled``) within 1e-6 of the best such
+    motion time (0 and inf when none has settled).
     """
-    return line_searches(here.null, here.quad, np.ascontiguousarray(base, dtype=float),
-                         np.ascontiguousarray(start), np.ascontiguousarray(scale),
-                         np.ascontiguousarray(lo), np.ascontiguousarray(hi),
-                         np.ascontiguousarray(radius, dtype=float), _TIE)
+    best = np.inf
+    for k in range(motion_time.shape[0]):
+        if error[k] <= settled:
+            best = min(best, motion_time[k])
+    count = 0
+    for k in range(motion_time.shape[0]):
+        count += error[k] <= settled and motion_time[k] <= best * (1 + 1e-6)
+    return count, best
 
 
-def _trial(obj: Objective, here: Linearisation, x: np.ndarray, radius: np.ndarray,
-           wide: bool, vertex_only: bool) -> np.ndarray:
+@kernel
+def early_stop(stop: EarlyStop, motion_time: np.ndarray, error: np.ndarray, radius: np.ndarray,
+               previous: np.ndarray, first: bool) -> bool:
+    """
+    Return whether the polish may end now (``EarlyStop``); ``previous``: the last step's times.
+
+    ``previous`` is overwritten by ``motion_time``; ``first``: the first step (none before).
+    """
+    if stop.agreement == 0:
+        return False
+    agree, best = agreeing(motion_time, error, stop.settled)
+    blocked = False
+    for k in range(motion_time.shape[0]):
+        sliding = (first or motion_time[k] < previous[k] * (1 - 1e-12)) and (
+            motion_time[k] < best * 1.01)
+        settling = error[k] > stop.settled and (motion_time[k] < best or not stop.faster)
+        blocked |= (radius[k] > stop.active and error[k] < stop.near
+                    and (settling or sliding))
+        previous[k] = motion_time[k]
+    return agree >= stop.agreement and not blocked
+
+
+@kernel
+def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                            np.ndarray, np.ndarray]:
+    """
+    Return ``linearise``'s c, R, merit, J^+, N and Q at x (K, planned), and the error (eq. 11).
+
+    ``free``: the null directions wanted (0: a Newton step is all that is needed).
+    """
+    rows = tool_rows(problem.chain, x, True)
+    dim = x.shape[1]
+    hessian = chain_hessian(rows) if free else np.empty((0, dim, dim, 2, 3))
+    c, time, merit, pinv, null, quad = linearise(
+        rows, hessian, x, problem.start, problem.scale, problem.omega, problem.goal,
+        problem.across, TRAVEL_WEIGHT, weight, free)
+    error = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
+                        problem.reach)
+    return c, time, merit, pinv, null, quad, error
+
+
+@kernel
+def clip_to_box(problem: Problem, x: np.ndarray) -> None:
+    """Clip x (K, planned) to the search box, in place."""
+    for k in range(x.shape[0]):
+        for i in range(x.shape[1]):
+            x[k, i] = min(max(x[k, i], problem.lower[i]), problem.upper[i])
+
+
+@kernel
+def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarray,
+                 null: np.ndarray, quad: np.ndarray, radius: np.ndarray, sets: tuple,
+                 wide: bool) -> np.ndarray:
     """
     Return the polish's trial points from candidates x (K, planned) and their linearisation.
 
     The Newton step to the solutions (within the trust radii), the step along them (the line
-    searches, or on sets of 2+ dimensions the SQP step), the limits, then the second-order
-    correction: chord Newton steps with the Jacobian at x, each within the trust radius.
+    searches, or on sets of 2+ dimensions the SQP step over the active sets ``sets``, clipped
+    to the box), the box, then the second-order correction: chord Newton steps with the
+    Jacobian at x, each within the trust radius.
     """
-    lo, hi, scale = obj.lower, obj.upper, obj.time_scale
-    start = obj.planned_start
-    base = x + here.newton(here.c, radius)
+    base = x + minimum_norm_steps(pinv, c, radius)
     if wide:
-        base = _null_step(here.null, here.quad, base, start, scale, lo, hi, radius,
-                          vertex_only)
+        z = minimax_step(base - problem.start, null, quad, problem.scale,
+                         problem.lower - base, problem.upper - base, radius, sets.pieces,
+                         sets.vertex, sets.clashes, sets.r)
+        for k in range(base.shape[0]):
+            for a in range(z.shape[1]):
+                base[k] += z[k, a] * null[k, a]
+                for b in range(z.shape[1]):
+                    base[k] += z[k, a] * z[k, b] * quad[k, a, b]
+        clip_to_box(problem, base)
     else:
-        base = _line_searches(here, base, start, scale, lo, hi, radius)
-    trial = np.clip(base, lo, hi)
-    for _ in range(_CHORD_STEPS if wide else 1):
-        trial = np.clip(trial + here.newton(_residuals(obj, trial), radius), lo, hi)
-    return trial
+        base = line_searches(null, quad, base, problem.start, problem.scale, problem.lower,
+                             problem.upper, radius, TIE)
+    clip_to_box(problem, base)
+    for _ in range(CHORD_STEPS if wide else 1):
+        res, _ = residuals_and_jacobians(tool_rows(problem.chain, base, False), problem.goal,
+                                         problem.across)
+        base += minimum_norm_steps(pinv, res, radius)
+        clip_to_box(problem, base)
+    return base
+
+
+@kernel
+def polish_step(problem: Problem, x: np.ndarray, model: tuple, delta: np.ndarray,
+                trust: np.ndarray, rejected: np.ndarray, active: np.ndarray, weight: float,
+                sets: tuple, wide: bool) -> None:
+    """
+    Take one polish step from the ``active`` candidates x (K, planned), in place (``polish``).
+
+    ``model``: ``linearise_at``'s arrays at x; ``delta``: the trust radii (0: converged);
+    ``rejected``: the steps rejected in a row; ``sets``: the active sets of the SQP step.
+    """
+    rows = np.flatnonzero(active)
+    c, time, merit, pinv, null, quad, error = model
+    radius = delta[rows]
+    trial = trial_points(problem, x[rows], c[rows], pinv[rows], null[rows], quad[rows], radius,
+                         sets, wide)
+    there = linearise_at(problem, trial, weight, null.shape[1])
+    for n in range(rows.shape[0]):
+        k = rows[n]
+        moved = 0.0
+        for i in range(x.shape[1]):
+            moved += (trial[n, i] - x[k, i]) ** 2
+        moved = np.sqrt(moved)
+        accept = radius[n] > 0.0 and there[2][n] < merit[k]
+        if accept:
+            x[k] = trial[n]
+            c[k], time[k], merit[k], pinv[k] = there[0][n], there[1][n], there[2][n], there[3][n]
+            null[k], quad[k], error[k] = there[4][n], there[5][n], there[6][n]
+        # a rejected step shrinks the radius below its own length: the same trial again
+        # would be rejected again
+        delta[k] = min(2 * radius[n], trust[k]) if accept else min(radius[n], moved) / 2
+        converged = delta[k] <= SMALLEST_RADIUS
+        if wide:        # on the solutions and rejected STALLED times in a row: converged
+            rejected[k] = 0 if accept else rejected[k] + 1
+            converged |= rejected[k] >= STALLED and error[k] <= CONVERGED_ERROR
+            active[k] = not converged          # converged candidates leave the batch
+        if converged:
+            delta[k] = 0.0
+
+
+def _prune(model: list[np.ndarray], delta: np.ndarray, active: np.ndarray, count: int) -> None:
+    """Leave only the ``count`` active candidates of least merit that have not converged."""
+    rows = np.flatnonzero(active)
+    moving = np.where(delta[rows] > 0.0, model[2][rows], np.inf)           # converged: done
+    out = rows[np.argsort(moving, kind='stable')[count:]]
+    delta[out] = 0.0
+    active[out] = False
 
 
 def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
-           trust: float | np.ndarray = 0.5,
-           enough: Callable[[np.ndarray, np.ndarray, np.ndarray], bool] | None = None,
+           trust: float | np.ndarray = 0.5, stop: EarlyStop = NEVER,
+           interrupt: Callable[[], object] | None = None,
            prune: tuple[int, int] | None = None, vertex_steps: int = 0) -> np.ndarray:
     """
     Refine candidates x (K, planned) towards reached, least-motion-time joint goals.
 
-    ``enough(time, error, radius)``, if given, is asked after every step and ends the polish
-    early when it returns True (each candidate's motion time, s, constraint error, m, and trust
-    radius, rad: halved or less by each rejected step, doubled by each accepted one up to
-    ``trust``, one for all candidates or one each, and 0 once converged). A candidate has
-    converged when its radius falls to ``_SMALLEST_RADIUS``; on sets of 2+ dimensions also
-    when it is on the solutions and its steps were rejected ``_STALLED`` times in a row (it
-    then takes no more steps). ``prune`` = (steps, count): after that many steps only the
-    ``count`` candidates of least merit that have not converged take more steps; the others
-    are returned where they are. On sets of 2+ dimensions the first ``vertex_steps`` SQP
-    steps try only the vertex sets of ``_active_set_minimax`` (far from a minimum, the step
-    that counts).
+    Each step (``polish_step``, compiled) changes the trust radii: halved or less by each
+    rejected step, doubled by each accepted one up to ``trust`` (one for all candidates or one
+    each), and 0 once converged. A candidate has converged when its radius falls to
+    ``SMALLEST_RADIUS``; on sets of 2+ dimensions also when it is on the solutions and its
+    steps were rejected ``STALLED`` times in a row (it then takes no more steps). After every
+    step the polish ends when every candidate has converged, when ``stop`` says so
+    (``early_stop``) or when ``interrupt`` returns anything but None. ``prune`` = (steps,
+    count): after that many steps only the ``count`` candidates of least merit that have not
+    converged take more steps; the others are returned where they are. On sets of 2+
+    dimensions the first ``vertex_steps`` SQP steps try only the vertex sets of the active
+    sets (far from a minimum, the step that counts).
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
-    k = x.shape[0]
+    k, dim = x.shape
     weight = 1e3 / obj.arm.reach    # on |c|: above any Lagrange multiplier here (exact penalty)
-    here = Linearisation(obj, x, weight)
-    wide = here.null.shape[1] > 1           # a set of solutions of 2 or more dimensions
-    trust = np.broadcast_to(np.asarray(trust, dtype=float), (k,))
+    free = max(dim - 3 - len(obj.across_basis), 0)
+    model = list(linearise_at(obj.problem, x, weight, free))
+    wide = free > 1                         # a set of solutions of 2 or more dimensions
+    trust = np.ascontiguousarray(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))
     delta = trust.copy()                    # the trust radii; 0 once converged
-    rows = np.arange(k)                     # the candidates that take steps
-    rejected = np.zeros(k, dtype=int)
-    time, error = here.time.copy(), here.error.copy()
+    active = np.ones(k, dtype=bool)         # the candidates that take steps
+    rejected = np.zeros(k, dtype=np.int64)
+    previous = np.empty(k)
     for step in range(max_steps):
-        if prune is not None and step == prune[0] and len(rows) > prune[1]:
-            moving = np.where(delta[rows] > 0.0, here.merit, np.inf)      # converged: done
-            best = np.isin(np.arange(len(rows)), np.argsort(moving, kind='stable')[: prune[1]])
-            delta[rows[~best]] = 0.0
-            rows = rows[best]
-            here.take(best)
-        radius = delta[rows]
-        trial = _trial(obj, here, x[rows], radius, wide, step < vertex_steps)
-        there = Linearisation(obj, trial, weight)
-        moved = np.sqrt(np.einsum('km,km->k', trial - x[rows], trial - x[rows]))
-        accept = (radius > 0.0) & (there.merit < here.merit)
-        x[rows[accept]] = trial[accept]
-        here.keep(there, accept)
-        # a rejected step shrinks the radius below its own length: the same trial again
-        # would be rejected again
-        delta[rows] = np.where(accept, np.minimum(2 * radius, trust[rows]),
-                               np.minimum(radius, moved) / 2)
-        converged = delta[rows] <= _SMALLEST_RADIUS
-        time[rows], error[rows] = here.time, here.error
-        if wide:        # on the solutions and rejected _STALLED times in a row: converged
-            rejected[rows] = np.where(accept, 0, rejected[rows] + 1)
-            converged |= (rejected[rows] >= _STALLED) & (here.error <= _CONVERGED_ERROR)
-        delta[rows[converged]] = 0.0
-        if wide:        # converged candidates leave the batch
-            rows = rows[~converged]
-            here.take(~converged)
-        if not delta.any() or (enough is not None and enough(time, error, delta)):
+        if prune is not None and step == prune[0] and active.sum() > prune[1]:
+            _prune(model, delta, active, prune[1])
+        polish_step(obj.problem, x, tuple(model), delta, trust, rejected, active, weight,
+                    _active_sets(min(dim, free + LARGEST), free, step < vertex_steps), wide)
+        if (not delta.any() or early_stop(stop, model[1], model[6], delta, previous, step == 0)
+                or (interrupt is not None and interrupt() is not None)):
             break
     return x
 

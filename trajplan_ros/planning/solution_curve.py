@@ -405,21 +405,21 @@ def distinct(points: np.ndarray, radius: float) -> np.ndarray:
     The first of each grid cell of size ``radius`` is kept first (cheap), then the pairs.
     """
     n, dim = points.shape
+    cells = np.floor(points / radius)
+    order = np.arange(n)
+    for i in range(dim - 1, -1, -1):          # sorted by cell, each cell in its points' order
+        order = order[np.argsort(cells[order, i], kind='mergesort')]
     first = np.zeros(n, dtype=np.bool_)
-    for j in range(n):
-        first[j] = True
-        for e in range(j):
-            same = True
-            for i in range(dim):
-                same &= np.floor(points[j, i] / radius) == np.floor(points[e, i] / radius)
-            if same:
-                first[j] = False
-                break
+    for at in range(n):
+        first[order[at]] = at == 0 or np.any(cells[order[at]] != cells[order[at - 1]])
     kept = points[first]
     keep = np.ones(kept.shape[0], dtype=np.bool_)
     for j in range(kept.shape[0]):
         for e in range(j):
-            if np.max(np.abs(kept[j] - kept[e])) < radius:
+            near = True
+            for i in range(dim):
+                near &= abs(kept[j, i] - kept[e, i]) < radius
+            if near:
                 keep[j] = False
                 break
     return kept[keep]
@@ -465,26 +465,14 @@ def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
     The finest spacing first, then the coarser; best (least ``key``) first within each.
     """
     k, count, dim = points.shape
-    found = []
+    out = np.empty((0, dim))
     for size in np.unique(spacing):      # finest first; best first within each
-        rows, keys = [], []
+        chosen = np.zeros((k, count), dtype=np.bool_)
         for r in range(k):
-            for j in range(count):
-                if spacing[r] == size and minima[r, j]:
-                    rows.append(points[r, j])
-                    keys.append(key[r, j])
-        group = np.empty((len(rows), dim))
-        for n, at in enumerate(np.argsort(np.array(keys, dtype=np.float64), kind='mergesort')):
-            group[n] = rows[at]
-        found.append(distinct(group, size / 2))
-    total = 0
-    for group in found:
-        total += group.shape[0]
-    out = np.empty((total, dim))
-    at = 0
-    for group in found:
-        out[at: at + group.shape[0]] = group
-        at += group.shape[0]
+            chosen[r] = minima[r] & (spacing[r] == size)
+        order = np.argsort(key.ravel()[chosen.ravel()], kind='mergesort')
+        group = points.reshape((k * count, dim))[chosen.ravel()][order]
+        out = np.concatenate((out, distinct(group, size / 2)))
     return out
 
 
@@ -524,6 +512,8 @@ def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray
         bound = lowest_time(samples, spacing, start, scale, omega)
         for r in range(k):
             for j in range(count):
-                minima[r, j] &= (bound[r, j] < best_time
-                                 and np.max(np.abs(points[r, j] - best)) >= spacing[r] / 2)
+                far = False
+                for i in range(dim):
+                    far |= abs(points[r, j, i] - best[i]) >= spacing[r] / 2
+                minima[r, j] &= bound[r, j] < best_time and far
     return distinct_by_spacing(points, key, minima, spacing)
