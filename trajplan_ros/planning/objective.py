@@ -72,11 +72,10 @@ def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
 
     The first vector across is horizontal (z x p normalised; x on the z axis).
     """
-    ray = goal / np.linalg.norm(goal)
-    across = np.cross((0.0, 0.0, 1.0), ray)
-    size = np.linalg.norm(across)
-    across = across / size if size > 1e-12 else np.array([1.0, 0.0, 0.0])
-    return np.stack((ray, across, np.cross(ray, across)))
+    x, y, z = goal / np.sqrt(goal @ goal)
+    size = np.hypot(x, y)                                 # of z x ray = (-y, x, 0)
+    a, b = (-y / size, x / size) if size > 1e-12 else (1.0, 0.0)
+    return np.array([[x, y, z], [a, b, 0.0], [-z * b, z * a, x * b - y * a]])
 
 
 class Problem(NamedTuple):
@@ -176,10 +175,23 @@ class Objective:
         self._tail = arm.held_tail(self.start)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
+        self._holding: dict[int, Objective] = {across: self}
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
                                self.time_scale, self.omega, self.lower, self.upper)
+
+    def holding(self, across: int) -> Objective:
+        """
+        Return the objective of this goal that holds ``across`` components of the tool axis.
+
+        Built once (``solution_curve`` asks for it at every curve search).
+        """
+        if across not in self._holding:
+            self._holding[across] = Objective(self.arm, self.goal, self.start, mode=self.mode,
+                                              omega=self.omega, shaping=self.shaping,
+                                              across=across)
+        return self._holding[across]
 
     @property
     def radial(self) -> bool:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
+import functools
 import time
 from typing import Any, Callable, Sequence
 
@@ -46,6 +47,12 @@ DEFAULT_TOLERANCE = 1e-6
 DEFAULT_AXIS_TOLERANCE = 1e-6
 #: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
 _clock: Callable[[], float] = time.monotonic
+
+
+@functools.lru_cache(maxsize=1)
+def _default_arm() -> ArmModel:
+    """Return the paper's arm, built once: ``plan`` uses it internally only, never hands it out."""
+    return paper_arm()
 
 
 class PlanStatus(str, Enum):
@@ -150,7 +157,7 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param max_planning_time: longest search (s, monotonic clock); None: no limit.
     :param stop: asked after every iteration and polish step; True ends the search (Ctrl-C).
     """
-    arm = arm if arm is not None else paper_arm()
+    arm = arm if arm is not None else _default_arm()
     mode = Mode(mode)
     _check_settings(algorithm, (tolerance, axis_tolerance), max_planning_time, stop)
     clock = time.perf_counter()

@@ -40,7 +40,7 @@ from trajplan_ros.kinematics.forward import Chain, chain_hessian, tool_rows
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
                                                  residuals_and_jacobians, solution_model)
-from trajplan_ros.planning.objective import errors_eq11, Mode, Objective
+from trajplan_ros.planning.objective import errors_eq11, Objective
 
 __all__ = ['curve_constraint', 'curve_seeds', 'distinct', 'follow', 'limit_crossings',
            'lowest_time', 'neighbours', 'points_on_curves', 'project', 'seeds_on_curves', 'trace',
@@ -61,8 +61,7 @@ def curve_constraint(obj: Objective) -> Objective | None:
     if planned - 3 - len(obj.across_basis) == 1:
         return obj
     if obj.radial and planned in (4, 5):
-        return Objective(obj.arm, obj.goal, obj.start, mode=Mode.RADIAL, omega=obj.omega,
-                         across=planned - 4)
+        return obj.holding(planned - 4)
     return None
 
 
