@@ -7,9 +7,11 @@ The paper's algorithm, in its symbols: each particle has a position x (the plann
 angles), a velocity v and the best position it has visited, p_i; p_g is the best of those in
 its swarm. Every iteration, for every particle and joint, eq. (3)-(5):
 
-    phi3 = c3 r3 |p_g - p_i|                                   (3), ``_velocity_update``
-    v <- w v + c1 r1 (p_i - x) + c2 r2 (p_g - x) + phi3        (4), ``_velocity_update``
-    x <- x + v                                                 (5), ``_move``
+    phi3 = c3 r3 |p_g - p_i|                                   (3)
+    v <- w v + c1 r1 (p_i - x) + c2 r2 (p_g - x) + phi3        (4)
+    x <- x + v                                                 (5)
+
+(``fly_eq3_to_5``, compiled; the particles' bests are kept by ``remember_bests``)
 
 with the inertia weight w falling linearly from 0.9 to 0.4 and the acceleration coefficient c3
 from 2 to 0 over ``max_iter`` iterations, c1 = c2 = 2, and r1, r2, r3 uniform in [0, 1]
@@ -89,6 +91,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.objective import Evaluation, Objective
 from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
                                             OptimizeResult)
@@ -252,29 +255,38 @@ def _start(obj: Objective, rng: np.random.Generator, swarms: int, population: in
                    gbest_index=np.argmin(f, axis=1))
 
 
-def _velocity_update(swarm: _Swarms, rng: np.random.Generator, w: float, c1: float, c2: float,
-                     c3: float, vmax: np.ndarray) -> None:
+@kernel
+def fly_eq3_to_5(x: np.ndarray, v: np.ndarray, pbest: np.ndarray, gbest_index: np.ndarray,
+                 r: np.ndarray, w: float, c1: float, c2: float, c3: float, vmax: np.ndarray,
+                 lower: np.ndarray, upper: np.ndarray) -> None:
     """
-    Update the velocities by eq. (3)-(4), each component then capped at +-vmax.
+    Update the velocities by eq. (3)-(4), each component capped at +-vmax, and move by eq. (5).
 
-    ``w`` and ``c3`` are this iteration's values; r1, r2, r3 are drawn for every particle and
-    joint.
+    In place, for x, v, pbest (swarm, particle, joint) and each swarm's p_g (``gbest_index``);
+    ``w`` and ``c3`` are this iteration's values; r (3, swarm, particle, joint) holds r1, r2,
+    r3. A joint that leaves its limits is clipped to them and stops.
     """
-    x, pbest = swarm.x, swarm.pbest
-    gbest = swarm.gbest[:, None, :]
-    r1, r2, r3 = rng.random((3,) + x.shape)
-    phi3 = c3 * r3 * np.abs(gbest - pbest)                                     # eq. (3)
-    v = w * swarm.v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x) + phi3     # eq. (4)
-    np.clip(v, -vmax, vmax, out=v)
-    swarm.v = v
+    swarms, population, dim = x.shape
+    for s in range(swarms):
+        g = gbest_index[s]
+        for p in range(population):
+            for i in range(dim):
+                best, gbest = pbest[s, p, i], pbest[s, g, i]
+                phi3 = c3 * r[2, s, p, i] * abs(gbest - best)                      # eq. (3)
+                speed = (w * v[s, p, i] + c1 * r[0, s, p, i] * (best - x[s, p, i])
+                         + c2 * r[1, s, p, i] * (gbest - x[s, p, i]) + phi3)       # eq. (4)
+                speed = min(max(speed, -vmax[i]), vmax[i])
+                moved = x[s, p, i] + speed                                         # eq. (5)
+                if moved < lower[i] or moved > upper[i]:
+                    moved, speed = min(max(moved, lower[i]), upper[i]), 0.0
+                x[s, p, i], v[s, p, i] = moved, speed
 
 
-def _move(swarm: _Swarms, lower: np.ndarray, upper: np.ndarray) -> None:
-    """Move the particles by eq. (5), clipped to the joint limits (a clipped joint stops)."""
-    x = swarm.x + swarm.v                                                      # eq. (5)
-    outside = (x < lower) | (x > upper)
-    swarm.x = np.clip(x, lower, upper)
-    swarm.v[outside] = 0.0
+def _fly(swarm: _Swarms, rng: np.random.Generator, w: float, c1: float, c2: float, c3: float,
+         vmax: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Move the particles by eq. (3)-(5) (``fly_eq3_to_5``), r1, r2, r3 drawn for each."""
+    fly_eq3_to_5(swarm.x, swarm.v, swarm.pbest, swarm.gbest_index,
+                 rng.random((3,) + swarm.x.shape), w, c1, c2, c3, vmax, lower, upper)
 
 
 def _last_elimination(swarm: _Swarms, rng: np.random.Generator, lower: np.ndarray,
@@ -292,16 +304,28 @@ def _last_elimination(swarm: _Swarms, rng: np.random.Generator, lower: np.ndarra
     swarm.v[rows, worst] = 0.0
 
 
+@kernel
+def remember_bests(x: np.ndarray, f: np.ndarray, error: np.ndarray, pbest: np.ndarray,
+                   pbest_f: np.ndarray, pbest_err: np.ndarray, gbest_index: np.ndarray) -> None:
+    """
+    Keep each particle's best position p_i (by F) and each swarm's best p_g, in place.
+
+    x (swarm, particle, joint), f and error (swarm, particle): the positions just evaluated.
+    """
+    swarms, population, _ = x.shape
+    for s in range(swarms):
+        for p in range(population):
+            if f[s, p] < pbest_f[s, p]:
+                pbest[s, p], pbest_f[s, p], pbest_err[s, p] = x[s, p], f[s, p], error[s, p]
+        gbest_index[s] = np.argmin(pbest_f[s])
+
+
 def _evaluate(swarm: _Swarms, obj: Objective) -> int:
     """Evaluate F at the positions, update p_i and p_g; return the number of evaluations."""
     ev = obj(swarm.x.reshape(-1, swarm.x.shape[-1]))
     swarm.f = ev.efficiency.reshape(swarm.pbest_f.shape)
-    err = ev.error.reshape(swarm.pbest_f.shape)
-    better = swarm.f < swarm.pbest_f
-    swarm.pbest = np.where(better[..., None], swarm.x, swarm.pbest)
-    swarm.pbest_f = np.where(better, swarm.f, swarm.pbest_f)
-    swarm.pbest_err = np.where(better, err, swarm.pbest_err)
-    swarm.gbest_index = np.argmin(swarm.pbest_f, axis=1)
+    remember_bests(swarm.x, swarm.f, ev.error.reshape(swarm.pbest_f.shape), swarm.pbest,
+                   swarm.pbest_f, swarm.pbest_err, swarm.gbest_index)
     return swarm.f.size
 
 
@@ -635,8 +659,8 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
     for it in range(max_iter):
         # the paper's iteration: eq. (3)-(5) and last-elimination, with w and c3 scheduled
         frac = it / max(max_iter - 1, 1)
-        _velocity_update(swarm, rng, _linear(inertia, frac), c1, c2, _linear(c3, frac), vmax)
-        _move(swarm, obj.lower, obj.upper)
+        _fly(swarm, rng, _linear(inertia, frac), c1, c2, _linear(c3, frac), vmax, obj.lower,
+             obj.upper)
         if eliminated and (it + 1) % elimination_period == 0:
             _last_elimination(swarm, rng, obj.lower, obj.upper, eliminated)
         nfev += _evaluate(swarm, obj)

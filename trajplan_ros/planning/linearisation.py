@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.planning.time_law import joint_time, TimeLaw
 
 __all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps', 'solution_model']
 
@@ -280,7 +281,7 @@ def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray
 
 @kernel
 def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
-              scale: np.ndarray, omega: float, goal: np.ndarray, across: np.ndarray,
+              law: TimeLaw, omega: float, goal: np.ndarray, across: np.ndarray,
               travel_weight: float, weight: float, free: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          np.ndarray]:
@@ -289,7 +290,7 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
 
     ``walk`` (2 + 3 planned, K, 3): p, u and per joint dp/dq_i, du/dq_i, Z_i, and ``hessian``
     (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
-    directions); ``start`` and ``scale`` (omega / omega_i): per planned joint; ``across`` (h,
+    directions); ``start``: per planned joint; ``law``: the joints' time laws; ``across`` (h,
     3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
     ``weight`` (W): the merit's weights of the travel and of |c|; ``free``: the null
     directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
@@ -303,11 +304,11 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
         largest, travel, norm = 0.0, 0.0, 0.0
         for i in range(dim):
             moved = abs(x[k, i] - start[i])
-            largest = max(largest, moved * scale[i])
+            largest = max(largest, joint_time(law, i, moved))
             travel += moved
         for a in range(c.shape[1]):
             norm += c[k, a] * c[k, a]
-        time[k] = largest / omega
+        time[k] = largest
         merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
     pinv, null, quad = solution_model(jac, hessian, across, free)
     return c, time, merit, pinv, null, quad

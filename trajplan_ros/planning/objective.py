@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -34,7 +33,8 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
 from trajplan_ros.kinematics.forward import Chain, tool_rows
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.planning.fuzzy import RewardPunishment
+from trajplan_ros.planning.fuzzy import RewardPunishment, shaping_eq9
+from trajplan_ros.planning.time_law import motion_times, servo_law, TimeLaw
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
            'goal_ray_basis']
@@ -87,7 +87,8 @@ class Problem(NamedTuple):
     ray: np.ndarray         # (3, 3) the goal ray and two vectors across it (``ray_basis``)
     reach: float            # m, L of the error (``errors_eq11``)
     start: np.ndarray       # (m,) the planned joints' start angles
-    scale: np.ndarray       # (m,) omega / omega_i
+    law: TimeLaw            # each joint's time law: R = max_i t_i(|x_i - start_i|) (eq. 10)
+    scale: np.ndarray       # (m,) omega / omega_i, the servo law's ratios (the polish's steps)
     omega: float            # rad/s
     lower: np.ndarray       # (m,) the search box
     upper: np.ndarray       # (m,)
@@ -163,9 +164,11 @@ class Objective:
         #: Each planned joint's angular velocity omega_i (rad/s), and omega / omega_i.
         self.speeds = arm.speeds(self.omega)[:m]
         self.time_scale = self.omega / self.speeds
-        self._uniform = bool(np.all(self.time_scale == 1.0))
+        #: Each planned joint's time law (eq. 10: the servo's, t_i = d / omega_i).
+        self.law = servo_law(self.speeds)
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
-        self.longest_time = float(np.max((self.upper - self.lower) * self.time_scale)) / self.omega
+        #: R of the longest motion the limits allow (s), for the fuzzy rules (Table 1).
+        self.longest_time = float(motion_times(self.law, self.upper[None, :], self.lower)[0])
         #: Rows: the goal ray, then two unit vectors across it (radial mode only).
         self.ray_basis = goal_ray_basis(self.goal) if self.radial else np.eye(3)
         #: Rows: the components of the tool axis across the goal ray that the residuals hold at
@@ -179,7 +182,7 @@ class Objective:
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
-                               self.time_scale, self.omega, self.lower, self.upper)
+                               self.law, self.time_scale, self.omega, self.lower, self.upper)
 
     def holding(self, across: int) -> Objective:
         """
@@ -282,21 +285,33 @@ class Objective:
                            self.ray_basis, len(self.across_basis), self.arm.reach)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
-        """Return R of eq. (10), max_i |x_i - start_i| / omega_i, for x (N, planned)."""
-        moved = np.abs(x - self.planned_start)
-        if not self._uniform:
-            moved = moved * self.time_scale
-        # a fold over the few joints is several times faster than np.max(..., axis=1)
-        return functools.reduce(np.maximum, moved.T) / self.omega
+        """Return R of eq. (10), max_i t_i(|x_i - start_i|), for x (N, planned)."""
+        return motion_times(self.law, np.ascontiguousarray(x, dtype=float), self.planned_start)
 
     def __call__(self, x: np.ndarray) -> Evaluation:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""
-        x = np.atleast_2d(x)
-        p, u = self.tool(x)
-        err = self.errors(p, u)
-        r = self.motion_time(x)
-        # R as a fraction of the longest motion the limits allow, for the fuzzy rules (0 on an
-        # arm whose planned joints cannot move: limits lower = upper)
-        tau = r / self.longest_time if self.longest_time > 0.0 else np.zeros_like(r)
-        f = r + self.shaping(err, tau, self.err_max)
-        return Evaluation(f, r, err)
+        sh = self.shaping
+        return Evaluation(*efficiency_eq9(
+            self.problem, np.ascontiguousarray(np.atleast_2d(x), dtype=float), self.err_max,
+            self.longest_time, float(sh.eps), float(sh.s), float(sh.k), float(sh.j),
+            float(sh.sigma), sh.lambda_scale == 'log', bool(sh.fuzzy_rules), bool(sh.reward)))
+
+
+@kernel
+def efficiency_eq9(problem: Problem, x: np.ndarray, err_max: float, longest_time: float,
+                   eps: float, s: float, k: float, j: float, sigma: float, log_scale: bool,
+                   rules: bool, rewarded: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return F = R + S (eq. 9), R (eq. 10) and the error (eq. 11) at x (N, planned).
+
+    S is ``fuzzy.shaping_eq9`` with ``RewardPunishment``'s settings; its rules take R as a
+    fraction of ``longest_time``, the longest motion the limits allow (0 on an arm whose
+    planned joints cannot move).
+    """
+    rows = tool_rows(problem.chain, x, False)
+    err = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
+                      problem.reach)
+    r = motion_times(problem.law, x, problem.start)
+    tau = r / longest_time if longest_time > 0.0 else np.zeros_like(r)
+    return (r + shaping_eq9(err, tau, err_max, eps, s, k, j, sigma, log_scale, rules, rewarded),
+            r, err)

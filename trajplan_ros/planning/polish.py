@@ -230,7 +230,7 @@ def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int
     dim = x.shape[1]
     hessian = chain_hessian(rows) if free else np.empty((0, dim, dim, 2, 3))
     c, time, merit, pinv, null, quad = linearise(
-        rows, hessian, x, problem.start, problem.scale, problem.omega, problem.goal,
+        rows, hessian, x, problem.start, problem.law, problem.omega, problem.goal,
         problem.across, TRAVEL_WEIGHT, weight, free)
     error = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
                         problem.reach)

@@ -41,6 +41,7 @@ from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
                                                  residuals_and_jacobians, solution_model)
 from trajplan_ros.planning.objective import errors_eq11, Objective
+from trajplan_ros.planning.time_law import joint_time, TimeLaw
 
 __all__ = ['curve_constraint', 'curve_seeds', 'distinct', 'follow', 'limit_crossings',
            'lowest_time', 'neighbours', 'points_on_curves', 'project', 'seeds_on_curves', 'trace',
@@ -334,7 +335,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
     walk = _on_curves(obj, curve, probes, spacing, steps)
     best = np.full(probes.shape[1], np.nan) if best is None else best
-    return seeds_on_curves(*walk, spacing, obj.planned_start, obj.time_scale, obj.omega,
+    return seeds_on_curves(*walk, spacing, obj.planned_start, obj.law, obj.omega,
                            obj.ray_basis, curve is obj, best)
 
 
@@ -363,28 +364,27 @@ def neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @kernel
 def lowest_time(samples: np.ndarray, spacing: np.ndarray, start: np.ndarray,
-                scale: np.ndarray, omega: float) -> np.ndarray:
+                law: TimeLaw) -> np.ndarray:
     """
     Return a lower bound of R near each point of ``_on_curves``, (K, L), from its samples.
 
     Between two neighbouring samples each joint is taken to move monotonically, give or take a
     tenth of the sample spacing (the curve bends between samples): its displacement is then no
-    smaller than the lesser of its two ends, or 0 where it changes sign; R is the largest
-    displacement over its joint's omega_i. A sample is bounded over the stretches on either side
-    of it, a point between two samples over theirs.
+    smaller than the lesser of its two ends less that tenth, or 0 where it changes sign; R is
+    the largest t_i of those displacements (``law``). A sample is bounded over the stretches on
+    either side of it, a point between two samples over theirs.
     """
     k, count, dim = samples.shape
     stretch = np.empty((k, count - 1))
     for r in range(k):
-        slack = 0.1 * spacing[r] * np.max(scale)
         for s in range(count - 1):
             largest = 0.0
             for i in range(dim):
-                a = (samples[r, s, i] - start[i]) * scale[i]
-                b = (samples[r, s + 1, i] - start[i]) * scale[i]
+                a, b = samples[r, s, i] - start[i], samples[r, s + 1, i] - start[i]
                 if a * b > 0.0:
-                    largest = max(largest, min(abs(a), abs(b)))
-            stretch[r, s] = (largest - slack) / omega
+                    least = max(min(abs(a), abs(b)) - 0.1 * spacing[r], 0.0)
+                    largest = max(largest, joint_time(law, i, least))
+            stretch[r, s] = largest
     out = np.empty((k, 4 * (count - 1) + 1))
     for r in range(k):
         for s in range(count):
@@ -425,13 +425,14 @@ def distinct(points: np.ndarray, radius: float) -> np.ndarray:
 
 
 @kernel
-def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, scale: np.ndarray,
+def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, law: TimeLaw,
                omega: float, ray: np.ndarray, by_time: bool) -> np.ndarray:
     """
     Return what the seeds minimise at the points (K, L, m) along the curves; inf at NaN ones.
 
-    ``by_time``: the motion time R (eq. 10), plus 1e-6 of the travel (a tied stretch has one
-    minimum); else the angle between the tool ``axis`` (K L, 3) and the goal ray (``ray[0]``).
+    ``by_time``: the motion time R (eq. 10), plus 1e-6 of the travel over omega (a tied
+    stretch has one minimum); else the angle between the tool ``axis`` (K L, 3) and the goal
+    ray (``ray[0]``).
     """
     k, count, dim = points.shape
     key = np.full((k, count), np.inf)
@@ -443,9 +444,9 @@ def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, scale: n
                 largest, travel = 0.0, 0.0
                 for i in range(dim):
                     moved = abs(points[r, j, i] - start[i])
-                    largest = max(largest, moved * scale[i])
+                    largest = max(largest, joint_time(law, i, moved))
                     travel += moved
-                key[r, j] = largest / omega + 1e-6 * travel / omega
+                key[r, j] = largest + 1e-6 * travel / omega
             else:
                 u = axis[r * count + j]
                 along = u[0] * ray[0, 0] + u[1] * ray[0, 1] + u[2] * ray[0, 2]
@@ -477,7 +478,7 @@ def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
 
 @kernel
 def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray,
-                    axis: np.ndarray, spacing: np.ndarray, start: np.ndarray, scale: np.ndarray,
+                    axis: np.ndarray, spacing: np.ndarray, start: np.ndarray, law: TimeLaw,
                     omega: float, ray: np.ndarray, by_time: bool, best: np.ndarray
                     ) -> np.ndarray:
     """
@@ -487,7 +488,7 @@ def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray
     angle to the goal ray; ``best``: the answer so far (NaN: none).
     """
     k, count, dim = points.shape
-    key = curve_keys(points, axis, start, scale, omega, ray, by_time)
+    key = curve_keys(points, axis, start, law, omega, ray, by_time)
     before, after = neighbours(present)
     minima = np.zeros((k, count), dtype=np.bool_)
     for r in range(k):
@@ -507,8 +508,8 @@ def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray
                 minima[k - 1, j] &= np.isfinite(key[k - 1, j])
         best_time = 0.0
         for i in range(dim):
-            best_time = max(best_time, abs(best[i] - start[i]) * scale[i] / omega)
-        bound = lowest_time(samples, spacing, start, scale, omega)
+            best_time = max(best_time, joint_time(law, i, abs(best[i] - start[i])))
+        bound = lowest_time(samples, spacing, start, law)
         for r in range(k):
             for j in range(count):
                 far = False
