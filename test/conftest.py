@@ -14,17 +14,28 @@ and every node share one DDS domain chosen from the pid, with discovery kept on 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 import os
-from pathlib import Path
-import re
-import signal
-import subprocess
-import sys
-from typing import Any, Callable, Iterator, Mapping
+import shutil
+import tempfile
 
-import pytest
-from trajplan_ros.tools.node_process import PlannerProcess, TIMEOUT_S, wait_until
+# One cache of compiled kernels for the whole run, before anything imports numba: the source
+# tree, the venv's copy and the colcon install then compile the kernels once, not each
+# (tests of the cache itself set their own)
+_KERNEL_CACHE = None
+if 'NUMBA_CACHE_DIR' not in os.environ:
+    _KERNEL_CACHE = os.environ['NUMBA_CACHE_DIR'] = tempfile.mkdtemp(prefix='trajplan-kernels-')
+
+from dataclasses import dataclass  # noqa: E402, I100 (after the cache folder is set)
+from pathlib import Path  # noqa: E402
+import re  # noqa: E402
+import signal  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+from typing import Any, Callable, Iterator, Mapping  # noqa: E402
+
+import pytest  # noqa: E402
+from trajplan_ros.tools.node_process import (PlannerProcess, TIMEOUT_S,  # noqa: E402
+                                             wait_until)
 
 
 REPO = Path(__file__).resolve().parents[1]
@@ -33,6 +44,12 @@ PACKAGE = 'trajplan_ros'
 LIVENESS_S = TIMEOUT_S
 
 __all__ = ['LIVENESS_S', 'Install', 'NodeProcess', 'wait_until']
+
+
+def pytest_sessionfinish() -> None:
+    """Remove the run's cache of compiled kernels."""
+    if _KERNEL_CACHE is not None:
+        shutil.rmtree(_KERNEL_CACHE, ignore_errors=True)
 
 
 # --- environment and the colcon install ---------------------------------------------------------

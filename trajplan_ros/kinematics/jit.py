@@ -31,9 +31,9 @@ import time
 from typing import Any, Callable
 
 import numba
-from numba.core import caching
+from numba.core import caching, types
 
-__all__ = ['CORE', 'Warmup', 'core_stamp', 'kernel', 'kernels', 'warm_up']
+__all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'warm_up']
 
 _LOG = logging.getLogger('trajplan_ros')
 #: The folders whose sources key every kernel's cache: the kernels and all they read.
@@ -62,10 +62,20 @@ def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
 
 
 class _CoreStamped:
-    """A numba cache locator whose source stamp is the whole core's (``core_stamp``)."""
+    """
+    A numba cache locator whose source stamp is the whole core's (``core_stamp``).
+
+    In a cache folder outside the package, a module's kernels are kept under its folder's name
+    (``trajplan_ros_planning``), not under a hash of where the package is installed: copies of
+    the same sources (a venv, a colcon install) share one cache there.
+    """
 
     def get_source_stamp(self) -> str:
         return core_stamp()
+
+    @classmethod
+    def get_suitable_cache_subpath(cls, py_file: str) -> str:
+        return f'trajplan_ros_{Path(py_file).parent.name}'
 
 
 class UserProvidedLocator(_CoreStamped, caching.UserProvidedCacheLocator):
@@ -90,7 +100,22 @@ class _KernelCache(caching.FunctionCache):
 
 def kernel(func: Callable[..., Any]) -> Any:
     """Compile ``func`` with numba: no GIL, cached on disk where any cache folder is writable."""
-    compiled = numba.njit(nogil=True)(func)
+    return _compiled(func, 'never')
+
+
+def inlined_kernel(func: Callable[..., Any]) -> Any:
+    """
+    ``kernel``, but inlined into the kernels that call it, not compiled on its own for them.
+
+    numba builds every kernel called from another as a library of its own, and optimises each
+    caller's machine code anew with all its callees linked in: a helper called by one kernel
+    only (a step of that kernel's computation) would cost seconds of compile for nothing.
+    """
+    return _compiled(func, 'always')
+
+
+def _compiled(func: Callable[..., Any], inline: str) -> Any:
+    compiled = numba.njit(nogil=True, inline=inline)(func)
     try:
         compiled._cache = _KernelCache(func)       # what njit(cache=True) does, core-stamped
     except RuntimeError as exc:                 # numba: "cannot cache ...: no locator available"
@@ -101,8 +126,25 @@ def kernel(func: Callable[..., Any]) -> Any:
             _LOG.warning('trajplan_ros: no writable cache folder for the compiled kernels, so '
                          'every process compiles them anew; set NUMBA_CACHE_DIR to a writable '
                          'folder to keep them')
+    _compile_calls_unliteral(compiled)
     _KERNELS.append(compiled)
     return compiled
+
+
+def _compile_calls_unliteral(compiled: Any) -> None:
+    """
+    Let calls from other kernels compile ``compiled`` for their argument types, not values.
+
+    numba compiles a kernel called with a constant (``tool_rows(chain, x, True)``) for that
+    value: once for True, once for False and once more for a bool from Python, each a cold
+    compile of seconds. One compiled version for each type serves every call.
+    """
+    template = compiled.get_call_template
+
+    def get_call_template(args: tuple, kws: dict) -> Any:
+        return template(tuple(types.unliteral(a) for a in args),
+                        {k: types.unliteral(v) for k, v in kws.items()})
+    compiled.get_call_template = get_call_template
 
 
 def kernels() -> tuple[Any, ...]:

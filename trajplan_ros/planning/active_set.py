@@ -472,6 +472,6 @@ def minimax_step(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.nd
     linear model, whatever the Hessian. Every step is shortened to the trust radius and judged
     on the model; the best, or z = 0, wins (``best_steps``).
     """
-    steps = sqp_steps(*active_pieces(b, null, quad, scale, gap_lo, gap_hi, r), pieces, vertex,
-                      clashes, r)
+    grad, hess, rhs, joint = active_pieces(b, null, quad, scale, gap_lo, gap_hi, r)
+    steps = sqp_steps(grad, hess, rhs, joint, pieces, vertex, clashes, r)
     return best_steps(steps, b, null, quad, scale, gap_lo, gap_hi, limit)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.planning.time_law import joint_time, TimeLaw
 
 __all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps', 'solution_model']
@@ -279,7 +279,7 @@ def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray
     return quad
 
 
-@kernel
+@inlined_kernel
 def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
               law: TimeLaw, omega: float, goal: np.ndarray, across: np.ndarray,
               travel_weight: float, weight: float, free: int

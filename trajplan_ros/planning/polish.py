@@ -51,7 +51,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.planning.active_set import minimax_step
 from trajplan_ros.planning.linearisation import (line_searches, linearise, minimum_norm_steps,
                                                  residuals_and_jacobians)
@@ -237,7 +237,7 @@ def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int
     return c, time, merit, pinv, null, quad, error
 
 
-@kernel
+@inlined_kernel
 def clip_to_box(problem: Problem, x: np.ndarray) -> None:
     """Clip x (K, planned) to the search box, in place."""
     for k in range(x.shape[0]):
@@ -245,7 +245,7 @@ def clip_to_box(problem: Problem, x: np.ndarray) -> None:
             x[k, i] = min(max(x[k, i], problem.lower[i]), problem.upper[i])
 
 
-@kernel
+@inlined_kernel
 def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarray,
                  null: np.ndarray, quad: np.ndarray, radius: np.ndarray, sets: tuple,
                  wide: bool) -> np.ndarray:
@@ -353,7 +353,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     free = max(dim - 3 - len(obj.across_basis), 0)
     model = list(linearise_at(obj.problem, x, weight, free))
     wide = free > 1                         # a set of solutions of 2 or more dimensions
-    trust = np.ascontiguousarray(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))
+    trust = np.array(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))   # writable
     delta = trust.copy()                    # the trust radii; 0 once converged
     active = np.ones(k, dtype=bool)         # the candidates that take steps
     rejected = np.zeros(k, dtype=np.int64)

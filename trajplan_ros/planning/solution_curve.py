@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from trajplan_ros.kinematics.forward import Chain, chain_hessian, tool_rows
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
                                                  residuals_and_jacobians, solution_model)
 from trajplan_ros.planning.objective import errors_eq11, Objective
@@ -89,7 +89,7 @@ def newton_steps(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.n
     return x
 
 
-@kernel
+@inlined_kernel
 def _curve_model(chain: Chain, goal: np.ndarray, across: np.ndarray, x: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return c, J^+, the null direction and half the solutions' curvature along it at x."""
@@ -164,7 +164,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
                  steps)
 
 
-@kernel
+@inlined_kernel
 def limit_crossings(lower: np.ndarray, upper: np.ndarray, a: np.ndarray, b: np.ndarray
                     ) -> np.ndarray:
     """
@@ -235,7 +235,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
                                    obj.arm.reach, obj.lower, obj.upper, along))
 
 
-@kernel
+@inlined_kernel
 def snap_to_limits(along: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
     """Move samples (K, S, m) onto the limits where they are just outside (``_on_curves``)."""
     k, count, dim = along.shape
@@ -339,7 +339,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
                            obj.ray_basis, curve is obj, best)
 
 
-@kernel
+@inlined_kernel
 def neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     Return the index of the nearest present point before and after each point, (K, L) each.
@@ -362,7 +362,7 @@ def neighbours(present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return before, after
 
 
-@kernel
+@inlined_kernel
 def lowest_time(samples: np.ndarray, spacing: np.ndarray, start: np.ndarray,
                 law: TimeLaw) -> np.ndarray:
     """
@@ -396,7 +396,7 @@ def lowest_time(samples: np.ndarray, spacing: np.ndarray, start: np.ndarray,
     return out
 
 
-@kernel
+@inlined_kernel
 def distinct(points: np.ndarray, radius: float) -> np.ndarray:
     """
     Return the points (n, m), best first, ``radius`` (max-norm) or farther from all better ones.
@@ -424,7 +424,7 @@ def distinct(points: np.ndarray, radius: float) -> np.ndarray:
     return kept[keep]
 
 
-@kernel
+@inlined_kernel
 def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, law: TimeLaw,
                omega: float, ray: np.ndarray, by_time: bool) -> np.ndarray:
     """
@@ -456,7 +456,7 @@ def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, law: Tim
     return key
 
 
-@kernel
+@inlined_kernel
 def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
                         spacing: np.ndarray) -> np.ndarray:
     """
@@ -466,7 +466,15 @@ def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
     """
     k, count, dim = points.shape
     out = np.empty((0, dim))
-    for size in np.unique(spacing):      # finest first; best first within each
+    size = -np.inf
+    while True:                           # each spacing, the finest first
+        coarser = np.inf
+        for r in range(k):
+            if size < spacing[r] < coarser:
+                coarser = spacing[r]
+        if coarser == np.inf:
+            break
+        size = coarser
         chosen = np.zeros((k, count), dtype=np.bool_)
         for r in range(k):
             chosen[r] = minima[r] & (spacing[r] == size)
