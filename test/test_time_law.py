@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from trajplan_ros import ArmModel, paper_arm
 from trajplan_ros.planning.objective import Objective
@@ -41,3 +42,9 @@ def test_every_motion_time_of_the_core_comes_from_the_objectives_law() -> None:
     faster = obj.problem._replace(law=servo_law(2 * obj.law.velocity))
     np.testing.assert_allclose(linearise_at(faster, x, 1.0, 1)[1], expected / 2, rtol=1e-15)
     assert obj.longest_time == np.max((obj.upper - obj.lower) / obj.law.velocity)
+
+
+def test_a_law_the_kernels_do_not_know_is_refused() -> None:
+    law = servo_law(np.array([0.2]))._replace(kind=SERVO + 1)
+    with pytest.raises(ValueError, match='unknown time law'):
+        joint_time(law, 0, 1.0)

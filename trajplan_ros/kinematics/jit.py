@@ -66,8 +66,9 @@ class _CoreStamped:
     A numba cache locator whose source stamp is the whole core's (``core_stamp``).
 
     In a cache folder outside the package, a module's kernels are kept under its folder's name
-    (``trajplan_ros_planning``), not under a hash of where the package is installed: copies of
-    the same sources (a venv, a colcon install) share one cache there.
+    and the stamp (``trajplan_ros_planning_<stamp>``), not under a hash of where the package is
+    installed: copies of the same sources (a venv, a colcon install) share one cache there, and
+    copies of different sources do not take turns overwriting it.
     """
 
     def get_source_stamp(self) -> str:
@@ -75,7 +76,7 @@ class _CoreStamped:
 
     @classmethod
     def get_suitable_cache_subpath(cls, py_file: str) -> str:
-        return f'trajplan_ros_{Path(py_file).parent.name}'
+        return f'trajplan_ros_{Path(py_file).parent.name}_{core_stamp()[:16]}'
 
 
 class UserProvidedLocator(_CoreStamped, caching.UserProvidedCacheLocator):

@@ -178,7 +178,8 @@ class Objective:
         self._tail = arm.held_tail(self.start)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
-        self._holding: dict[int, Objective] = {across: self}
+        self._across = across
+        self._holding: dict[int, Objective] = {}
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
@@ -190,6 +191,8 @@ class Objective:
 
         Built once (``solution_curve`` asks for it at every curve search).
         """
+        if across == self._across:
+            return self
         if across not in self._holding:
             self._holding[across] = Objective(self.arm, self.goal, self.start, mode=self.mode,
                                               omega=self.omega, shaping=self.shaping,

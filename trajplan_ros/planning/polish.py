@@ -267,7 +267,6 @@ def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarra
                 base[k] += z[k, a] * null[k, a]
                 for b in range(z.shape[1]):
                     base[k] += z[k, a] * z[k, b] * quad[k, a, b]
-        clip_to_box(problem, base)
     else:
         base = line_searches(null, quad, base, problem.start, problem.scale, problem.lower,
                              problem.upper, radius, TIE)
@@ -363,8 +362,8 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
             _prune(model, delta, active, prune[1])
         polish_step(obj.problem, x, tuple(model), delta, trust, rejected, active, weight,
                     _active_sets(min(dim, free + LARGEST), free, step < vertex_steps), wide)
-        if (not delta.any() or early_stop(stop, model[1], model[6], delta, previous, step == 0)
-                or (interrupt is not None and interrupt() is not None)):
+        if (not delta.any() or (interrupt is not None and interrupt() is not None)
+                or early_stop(stop, model[1], model[6], delta, previous, step == 0)):
             break
     return x
 

@@ -43,9 +43,10 @@ from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum
 from trajplan_ros.planning.objective import errors_eq11, Objective
 from trajplan_ros.planning.time_law import joint_time, TimeLaw
 
-__all__ = ['curve_constraint', 'curve_seeds', 'distinct', 'follow', 'limit_crossings',
-           'lowest_time', 'neighbours', 'points_on_curves', 'project', 'seeds_on_curves', 'trace',
-           'wrap_into', 'curve_keys', 'distinct_by_spacing', 'snap_to_limits']
+__all__ = ['curve_constraint', 'curve_keys', 'curve_seeds', 'distinct', 'distinct_by_spacing',
+           'follow', 'limit_crossings', 'lowest_time', 'neighbours', 'newton_steps',
+           'points_on_curves', 'project', 'seeds_on_curves', 'snap_to_limits', 'trace',
+           'wrap_into']
 
 
 def curve_constraint(obj: Objective) -> Objective | None:
@@ -159,7 +160,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
     correction), straight through the joint limits (angles wrapped, ``wrap_into``).
     """
     x = np.ascontiguousarray(x, dtype=float)
-    step = np.ascontiguousarray(np.broadcast_to(step, (x.shape[0],)), dtype=float)
+    step = np.array(np.broadcast_to(step, (x.shape[0],)), dtype=float)
     return trace(curve.chain, curve.goal, curve.across_basis, curve.lower, curve.upper, x, step,
                  steps)
 
@@ -180,6 +181,8 @@ def limit_crossings(lower: np.ndarray, upper: np.ndarray, a: np.ndarray, b: np.n
     d = np.empty(dim)
     t = np.empty(3)
     for k in range(count):
+        if np.isnan(a[k]).any() or np.isnan(b[k]).any():
+            continue                                  # no chord: NaN rows
         enter, leave = -np.inf, np.inf
         for i in range(dim):
             d[i] = (b[k, i] - a[k, i] + np.pi) % (2.0 * np.pi) - np.pi

@@ -5,9 +5,13 @@ The time law of each joint: how long it takes to turn by d rad from rest to rest
 
 Eq. (10) is the paper's servo law: every joint turns at its angular velocity omega_i from the
 start, so joint i needs t_i(d) = d / omega_i and the motion takes R = max_i t_i(|q_i - q_start_i|).
-The kernels that need R take the law as an input (``TimeLaw``: a law id and its per-joint
-parameters) instead of hard-coding d / omega_i, so that other monotone laws (acceleration- and
-jerk-limited profiles) extend them without rewriting them.
+The kernels that compute R take the law as an input (``TimeLaw``: a law id and its per-joint
+parameters) instead of hard-coding d / omega_i: F, the polish's merit and linearisation, the
+curve search's keys and bounds. Another monotone law (an acceleration- or jerk-limited profile)
+is a new id in ``joint_time``. What it does not reach yet: the polish's closed-form steps (the
+line searches and the SQP step over active sets) minimise the servo law's scaled displacements
+(``Problem.scale``, omega / omega_i); under another law they must be rebuilt on t_i's inverse.
+Only SERVO exists, and ``joint_time`` refuses any other id.
 """
 from __future__ import annotations
 
@@ -34,14 +38,15 @@ class TimeLaw(NamedTuple):
 
 def servo_law(speeds: np.ndarray) -> TimeLaw:
     """Return eq. (10)'s law for joints turning at ``speeds`` (rad/s) each."""
-    speeds = np.ascontiguousarray(speeds, dtype=float)
-    unused = np.full(speeds.shape, np.inf)
-    return TimeLaw(SERVO, speeds, unused, unused)
+    speeds = np.array(speeds, dtype=float)
+    return TimeLaw(SERVO, speeds, np.full(speeds.shape, np.inf), np.full(speeds.shape, np.inf))
 
 
 @kernel
 def joint_time(law: TimeLaw, i: int, d: float) -> float:
     """Return t_i(d): the time (s) joint i needs to turn by d >= 0 rad from rest to rest."""
+    if law.kind != SERVO:
+        raise ValueError('unknown time law')
     return d / law.velocity[i]
 
 
