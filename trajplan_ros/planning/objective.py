@@ -180,6 +180,11 @@ class Objective:
         self.chain = arm.chain(self._tail)
         self._across = across
         self._holding: dict[int, Objective] = {}
+        sh = self.shaping                # as efficiency_eq9 takes them, as floats and bools
+        self._shaping_settings = (
+            float(self.err_max), self.longest_time, float(sh.eps), float(sh.s), float(sh.k),
+            float(sh.j), float(sh.sigma), sh.lambda_scale == 'log', bool(sh.fuzzy_rules),
+            bool(sh.reward))
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
@@ -198,6 +203,11 @@ class Objective:
                                               omega=self.omega, shaping=self.shaping,
                                               across=across)
         return self._holding[across]
+
+    @property
+    def null_directions(self) -> int:
+        """Return how many directions the solutions leave free: planned joints less constraints."""
+        return max(self.arm.planned - 3 - len(self.across_basis), 0)
 
     @property
     def radial(self) -> bool:
@@ -293,11 +303,9 @@ class Objective:
 
     def __call__(self, x: np.ndarray) -> Evaluation:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""
-        sh = self.shaping
         return Evaluation(*efficiency_eq9(
-            self.problem, np.ascontiguousarray(np.atleast_2d(x), dtype=float), self.err_max,
-            self.longest_time, float(sh.eps), float(sh.s), float(sh.k), float(sh.j),
-            float(sh.sigma), sh.lambda_scale == 'log', bool(sh.fuzzy_rules), bool(sh.reward)))
+            self.problem, np.ascontiguousarray(np.atleast_2d(x), dtype=float),
+            *self._shaping_settings))
 
 
 @kernel

@@ -132,7 +132,7 @@ class Linearisation:
     def __init__(self, obj: Objective, x: np.ndarray, weight: float,
                  newton_only: bool = False) -> None:
         x = np.ascontiguousarray(x, dtype=float)
-        free = 0 if newton_only else max(x.shape[1] - 3 - len(obj.across_basis), 0)
+        free = 0 if newton_only else obj.null_directions
         (self.c, self.time, self.merit, self.pinv, self.null, self.quad,
          self.error) = linearise_at(obj.problem, x, float(weight), free)
 
@@ -349,7 +349,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k, dim = x.shape
     weight = 1e3 / obj.arm.reach    # on |c|: above any Lagrange multiplier here (exact penalty)
-    free = max(dim - 3 - len(obj.across_basis), 0)
+    free = obj.null_directions
     model = list(linearise_at(obj.problem, x, weight, free))
     wide = free > 1                         # a set of solutions of 2 or more dimensions
     trust = np.array(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))   # writable

@@ -36,11 +36,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.forward import Chain, chain_hessian, tool_rows
+from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
                                                  residuals_and_jacobians, solution_model)
-from trajplan_ros.planning.objective import errors_eq11, Objective
+from trajplan_ros.planning.objective import errors_eq11, Objective, Problem
 from trajplan_ros.planning.time_law import joint_time, TimeLaw
 
 __all__ = ['curve_constraint', 'curve_keys', 'curve_seeds', 'distinct', 'distinct_by_spacing',
@@ -60,7 +60,7 @@ def curve_constraint(obj: Objective) -> Objective | None:
     lie on its curves, where the axis comes nearest the goal ray.
     """
     planned = obj.arm.planned
-    if planned - 3 - len(obj.across_basis) == 1:
+    if obj.null_directions == 1:
         return obj
     if obj.radial and planned in (4, 5):
         return obj.holding(planned - 4)
@@ -78,31 +78,30 @@ def wrap_into(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
 
 
 @kernel
-def newton_steps(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
-                 upper: np.ndarray, x: np.ndarray, steps: int) -> np.ndarray:
+def newton_steps(curve: Problem, x: np.ndarray, steps: int) -> np.ndarray:
     """Return x (K, m) after ``steps`` minimum-norm Newton steps, wrapped (``project``)."""
     x = x.copy()
     unbounded = np.full(x.shape[0], np.inf)
     for _ in range(steps):
-        c, jac = residuals_and_jacobians(tool_rows(chain, x, True), goal, across)
+        c, jac = residuals_and_jacobians(tool_rows(curve.chain, x, True), curve.goal,
+                                         curve.across)
         x += minimum_norm_steps(damped_pseudo_inverses(jac), c, unbounded)
-        wrap_into(x, lower, upper)
+        wrap_into(x, curve.lower, curve.upper)
     return x
 
 
 @inlined_kernel
-def _curve_model(chain: Chain, goal: np.ndarray, across: np.ndarray, x: np.ndarray
+def _curve_model(curve: Problem, x: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return c, J^+, the null direction and half the solutions' curvature along it at x."""
-    rows = tool_rows(chain, x, True)
-    c, jac = residuals_and_jacobians(rows, goal, across)
-    pinv, null, quad = solution_model(jac, chain_hessian(rows), across, 1)
+    rows = tool_rows(curve.chain, x, True)
+    c, jac = residuals_and_jacobians(rows, curve.goal, curve.across)
+    pinv, null, quad = solution_model(jac, chain_hessian(rows), curve.across, 1)
     return c, pinv, null[:, 0, :], quad[:, 0, 0, :]
 
 
 @kernel
-def trace(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
-          upper: np.ndarray, x: np.ndarray, step: np.ndarray, steps: int) -> np.ndarray:
+def trace(curve: Problem, x: np.ndarray, step: np.ndarray, steps: int) -> np.ndarray:
     """
     Return the curves of solutions through the rows of x (K, m), (K, 2 steps + 1, m) (``follow``).
 
@@ -113,7 +112,7 @@ def trace(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
     k, dim = x.shape
     ends = np.concatenate((x, x))
     unbounded = np.full(2 * k, np.inf)
-    c, pinv, null, bend = _curve_model(chain, goal, across, ends)
+    c, pinv, null, bend = _curve_model(curve, ends)
     direction = null.copy()
     direction[k:] *= -1.0
     length = np.concatenate((step, step))
@@ -123,7 +122,7 @@ def trace(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
         for r in range(2 * k):
             for i in range(dim):
                 ends[r, i] += (direction[r, i] + bend[r, i] * length[r]) * length[r]
-        c, pinv, null, bend = _curve_model(chain, goal, across, ends)
+        c, pinv, null, bend = _curve_model(curve, ends)
         ends += minimum_norm_steps(pinv, c, unbounded)
         for r in range(2 * k):
             turn = 0.0
@@ -132,7 +131,7 @@ def trace(chain: Chain, goal: np.ndarray, across: np.ndarray, lower: np.ndarray,
             for i in range(dim):
                 direction[r, i] = null[r, i] * np.sign(turn)
         sample = ends.copy()
-        wrap_into(sample, lower, upper)
+        wrap_into(sample, curve.lower, curve.upper)
         out[:, steps + 1 + s] = sample[:k]
         out[:, steps - 1 - s] = sample[k:]
     return out
@@ -145,8 +144,7 @@ def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     The limits are ignored and angles wrapped (``wrap_into``). Rows that have not converged yet
     carry on converging in ``follow``, which corrects every step.
     """
-    return newton_steps(curve.chain, curve.goal, curve.across_basis, curve.lower, curve.upper,
-                        np.ascontiguousarray(x, dtype=float), steps)
+    return newton_steps(curve.problem, np.ascontiguousarray(x, dtype=float), steps)
 
 
 def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
@@ -161,8 +159,7 @@ def follow(curve: Objective, x: np.ndarray, step: float | np.ndarray,
     """
     x = np.ascontiguousarray(x, dtype=float)
     step = np.array(np.broadcast_to(step, (x.shape[0],)), dtype=float)
-    return trace(curve.chain, curve.goal, curve.across_basis, curve.lower, curve.upper, x, step,
-                 steps)
+    return trace(curve.problem, x, step, steps)
 
 
 @inlined_kernel
@@ -234,8 +231,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     points moved onto the limits can be that far) are NaN.
     """
     along = follow(curve, project(curve, probes), step, steps)              # (K, S, planned)
-    return _Walk(*points_on_curves(curve.chain, curve.goal, curve.across_basis, curve.ray_basis,
-                                   obj.arm.reach, obj.lower, obj.upper, along))
+    return _Walk(*points_on_curves(curve.problem, along))
 
 
 @inlined_kernel
@@ -266,14 +262,14 @@ def snap_to_limits(along: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> N
 
 
 @kernel
-def points_on_curves(chain: Chain, goal: np.ndarray, across: np.ndarray, ray: np.ndarray,
-                     reach: float, lower: np.ndarray, upper: np.ndarray, along: np.ndarray
+def points_on_curves(curve: Problem, along: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
     Return ``_Walk``'s points, samples, present and axis for the samples ``along`` (K, S, m).
 
     See ``_on_curves``; ``along`` is changed in place (samples snapped onto the limits).
     """
+    lower, upper, reach = curve.lower, curve.upper, curve.reach
     k, count, dim = along.shape
     snap_to_limits(along, lower, upper)
     chords = (count - 1) * k
@@ -303,8 +299,8 @@ def points_on_curves(chain: Chain, goal: np.ndarray, across: np.ndarray, ray: np
     flat = np.empty((count_inside, dim))
     for n in range(count_inside):
         flat[n] = points[inside[n] // size, inside[n] % size]
-    rows = tool_rows(chain, flat, False)
-    error = errors_eq11(rows[0], rows[1], goal, ray, across.shape[0], reach)
+    rows = tool_rows(curve.chain, flat, False)
+    error = errors_eq11(rows[0], rows[1], curve.goal, curve.ray, curve.across.shape[0], reach)
     axis = np.zeros((k * size, 3))
     for n in range(count_inside):
         j = inside[n]
@@ -338,8 +334,7 @@ def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
         probes, spacing = np.concatenate((probes, best[None, :])), np.append(spacing, fine)
     walk = _on_curves(obj, curve, probes, spacing, steps)
     best = np.full(probes.shape[1], np.nan) if best is None else best
-    return seeds_on_curves(*walk, spacing, obj.planned_start, obj.law, obj.omega,
-                           obj.ray_basis, curve is obj, best)
+    return seeds_on_curves(*walk, spacing, obj.problem, curve is obj, best)
 
 
 @inlined_kernel
@@ -489,17 +484,17 @@ def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
 
 @kernel
 def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray,
-                    axis: np.ndarray, spacing: np.ndarray, start: np.ndarray, law: TimeLaw,
-                    omega: float, ray: np.ndarray, by_time: bool, best: np.ndarray
-                    ) -> np.ndarray:
+                    axis: np.ndarray, spacing: np.ndarray, obj: Problem, by_time: bool,
+                    best: np.ndarray) -> np.ndarray:
     """
     Return ``curve_seeds``'s seeds from the points along the curves (``_on_curves``).
 
-    ``by_time``: the minima of the motion time (then of the travel), else of the tool axis's
-    angle to the goal ray; ``best``: the answer so far (NaN: none).
+    ``obj``: the objective's arrays (its start, time law, omega and goal ray); ``by_time``: the
+    minima of the motion time (then of the travel), else of the tool axis's angle to the goal
+    ray; ``best``: the answer so far (NaN: none).
     """
     k, count, dim = points.shape
-    key = curve_keys(points, axis, start, law, omega, ray, by_time)
+    key = curve_keys(points, axis, obj.start, obj.law, obj.omega, obj.ray, by_time)
     before, after = neighbours(present)
     minima = np.zeros((k, count), dtype=np.bool_)
     for r in range(k):
@@ -519,8 +514,8 @@ def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray
                 minima[k - 1, j] &= np.isfinite(key[k - 1, j])
         best_time = 0.0
         for i in range(dim):
-            best_time = max(best_time, joint_time(law, i, abs(best[i] - start[i])))
-        bound = lowest_time(samples, spacing, start, law)
+            best_time = max(best_time, joint_time(obj.law, i, abs(best[i] - obj.start[i])))
+        bound = lowest_time(samples, spacing, obj.start, obj.law)
         for r in range(k):
             for j in range(count):
                 far = False
