@@ -140,7 +140,9 @@ def test_line_searches_lower_the_largest_displacement_within_the_radius():
     base = rng.uniform(-0.9, 0.9, (k, m))
     start, scale = rng.uniform(-1, 1, m), rng.uniform(0.5, 2.0, m)
     radius = rng.uniform(0.01, 0.5, k)
-    out = line_searches(null, quad, base, start, scale, -np.ones(m), np.ones(m), radius, 1e-12)
+    per_candidate = np.ascontiguousarray(np.broadcast_to(scale, (k, m)))
+    out = line_searches(null, quad, base, start, per_candidate, -np.ones(m), np.ones(m), radius,
+                        1e-12)
     # the step is (n + a z) z for one z with |z| <= radius, and z = 0 is among the candidates
     n, a = null[:, 0], quad[:, 0, 0]
     z = np.array([np.roots([a_k @ n_k, 1.0, -(o - b) @ n_k]) for a_k, n_k, o, b

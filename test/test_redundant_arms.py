@@ -25,9 +25,14 @@ def published(name: str) -> ArmModel:
 def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.ndarray,
                         gap_lo: np.ndarray, gap_hi: np.ndarray, limit: np.ndarray,
                         vertex_only: bool = False) -> np.ndarray:
-    """Return the polish's SQP step z (K, k) over the active sets, as ``trial_points`` takes it."""
+    """
+    Return the polish's SQP step z (K, k) over the active sets, as ``trial_points`` takes it.
+
+    ``scale`` (m,): the same for every candidate.
+    """
     k, m = null.shape[1:]
     sets = _active_sets(min(m, k + LARGEST), k, vertex_only)
+    scale = np.broadcast_to(scale, (len(b), m))
     arrays = [np.ascontiguousarray(a, dtype=float)
               for a in (b, null, quad, scale, gap_lo, gap_hi, limit)]
     return minimax_step(*arrays, *sets)
@@ -139,7 +144,7 @@ def test_every_active_set_takes_the_step_of_its_kkt_system(k: int, m: int) -> No
     quad = 0.5 * (quad + np.swapaxes(quad, 1, 2))
     b = rng.uniform(-3.0, 3.0, (6, m))
     gap_lo, gap_hi = rng.uniform(-2.0, -0.1, (6, m)), rng.uniform(0.1, 2.0, (6, m))
-    grad, hess, rhs, joint = active_pieces(b, null, quad, rng.uniform(1.0, 2.0, m), gap_lo,
+    grad, hess, rhs, joint = active_pieces(b, null, quad, rng.uniform(1.0, 2.0, (6, m)), gap_lo,
                                            gap_hi, r)
     z = sqp_steps(grad, hess, rhs, joint, pieces, sets.vertex, sets.clashes, r)
     for i in range(6):
@@ -166,7 +171,8 @@ def test_the_step_is_the_best_of_the_sets_on_the_model(k: int, m: int) -> None:
     b = rng.uniform(-3.0, 3.0, (8, m))
     gap_lo, gap_hi = rng.uniform(-2.0, -0.05, (8, m)), rng.uniform(0.05, 2.0, (8, m))
     scale, limit = rng.uniform(1.0, 2.0, m), rng.uniform(0.1, 1.0, 8)
-    steps = sqp_steps(*active_pieces(b, null, quad, scale, gap_lo, gap_hi, r), sets.pieces,
+    per_candidate = np.ascontiguousarray(np.broadcast_to(scale, (8, m)))
+    steps = sqp_steps(*active_pieces(b, null, quad, per_candidate, gap_lo, gap_hi, r), sets.pieces,
                       sets.vertex, sets.clashes, r)
     z = _active_set_minimax(b, null, quad, scale, gap_lo, gap_hi, limit)
     for i in range(8):

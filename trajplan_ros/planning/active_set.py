@@ -9,7 +9,8 @@ per-call overhead on arrays that small cost several times the arithmetic.
 The model (``polish``): the joint displacements along the solutions are d(z) = b + z N +
 z^T Q z in the step z (k,), with b the displacements from the start, N (k, m) orthonormal null
 directions and Q (k, k, m) half the second derivative of the solutions. The step minimises the
-motion time max_i scale_i |d_i(z)| within the joint limits and the trust radius. Each active
+motion time max_i scale_i |d_i(z)| (``time_law.tie_scales``, per candidate) within the joint
+limits and the trust radius. Each active
 set (``polish._active_sets``: joints tying with the largest displacement, each with its sign at
 z = 0, and any of the k nearest limits) gives the step of one SQP problem,
 
@@ -132,7 +133,7 @@ def active_pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.n
                 if best < 0:
                     best = j
                 elif p < r:
-                    if np.abs(b[i, j]) * scale[j] > np.abs(b[i, best]) * scale[best]:
+                    if np.abs(b[i, j]) * scale[i, j] > np.abs(b[i, best]) * scale[i, best]:
                         best = j
                 elif (min(gap_hi[i, j], -gap_lo[i, j])
                       < min(gap_hi[i, best], -gap_lo[i, best])):
@@ -143,8 +144,8 @@ def active_pieces(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.n
             # each piece's sign: the joint's for a displacement, 1 for a limit
             weight = 1.0
             if p < r:
-                weight = scale[j] if b[i, j] >= 0.0 else -scale[j]
-                rhs[i, p] = -(np.abs(b[i, j]) * scale[j])
+                weight = scale[i, j] if b[i, j] >= 0.0 else -scale[i, j]
+                rhs[i, p] = -(np.abs(b[i, j]) * scale[i, j])
             else:
                 rhs[i, p] = gap_hi[i, j] if gap_hi[i, j] < -gap_lo[i, j] else gap_lo[i, j]
             for a in range(k):
@@ -415,7 +416,7 @@ def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndar
         best, usable = 0.0, True                # z = 0: usable where no joint is off limits
         for j in range(m):
             usable = usable and gap_lo[i, j] - SLACK <= 0.0 <= gap_hi[i, j] + SLACK
-            moved = np.abs(b[i, j] + min(max(0.0, gap_lo[i, j]), gap_hi[i, j])) * scale[j]
+            moved = np.abs(b[i, j] + min(max(0.0, gap_lo[i, j]), gap_hi[i, j])) * scale[i, j]
             best = max(best, moved)
             for a in range(k):
                 across[j, a] = null[i, a, j]
@@ -445,7 +446,7 @@ def best_steps(steps: np.ndarray, b: np.ndarray, null: np.ndarray, quad: np.ndar
                 for q in range(k * k):
                     curve += pairs[q] * curving[j, q]
                 step = min(max(linear + curve, gap_lo[i, j]), gap_hi[i, j])
-                worst = max(worst, np.abs(b[i, j] + step) * scale[j])
+                worst = max(worst, np.abs(b[i, j] + step) * scale[i, j])
                 if worst >= best:
                     break
             if worst < best:
@@ -464,7 +465,7 @@ def minimax_step(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale: np.nd
     Return z (K, k) that minimises max_i scale_i |d_i(z)| on the quadratic model of the solutions.
 
     d(z) = b + z N + z^T Q z (b (K, m): displacements; ``null`` (K, k, m): N, orthonormal rows;
-    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions; ``scale`` (m,)).
+    ``quad`` (K, k, k, m): Q, half the second derivative of the solutions; ``scale`` (K, m)).
     The steps must keep the joints within [gap_lo, gap_hi] and ||z|| within ``limit`` (K,).
     Each active set (``pieces``, ``vertex``, ``clashes``: ``polish._active_sets`` of the r
     largest displacements, ``active_pieces``) gives the SQP step of min t subject to those

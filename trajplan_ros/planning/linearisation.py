@@ -432,7 +432,8 @@ def line_searches(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: n
     Along direction n (``null`` (K, k, m)) with half the curvature a (the diagonal of ``quad``)
     the joints move by (n + a z) z; the step z keeps the linear part within [lo, hi] and |z|
     within ``radius`` (K,), and minimises the largest scaled displacement from ``start``
-    (``scale``: omega / omega_i), ties within ``tie`` going to the least total travel.
+    (``scale`` (K, m): ``time_law.tie_scales``), ties within ``tie`` going to the least total
+    travel.
     """
     count, free, m = null.shape
     out = base.copy()
@@ -451,9 +452,9 @@ def line_searches(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: n
                     zhi = min(zhi, max(to_lo, to_hi))
             zhi = max(zhi, zlo)
             for i in range(m):
-                b[i] = (x[i] - start[i]) * scale[i]
-                n[i] = null[k, j, i] * scale[i]
-                a[i] = quad[k, j, j, i] * scale[i]
+                b[i] = (x[i] - start[i]) * scale[k, i]
+                n[i] = null[k, j, i] * scale[k, i]
+                a[i] = quad[k, j, j, i] * scale[k, i]
             z = line_minimax(b, n, a, zlo, zhi, tie)
             for i in range(m):
                 x[i] = x[i] + (null[k, j, i] + quad[k, j, j, i] * z) * z

@@ -6,8 +6,10 @@ The efficiency scalar F = R + S of Lv et al. 2019 (eq. 9-14) for one goal and st
 R (eq. 10) is the motion time when every servo turns at the same angular velocity omega:
 max_i |q_i - q_start_i| / omega over the planned joints. A joint whose velocity limit is below
 omega turns at its limit instead: R = max_i |q_i - q_start_i| / omega_i with
-omega_i = min(omega, limit_i) (``speeds``; the paper's arm has no such limit). S is the fuzzy
-rewards-and-punishment term on the error (eq. 11, ``fuzzy.RewardPunishment``).
+omega_i = min(omega, limit_i) (``speeds``; the paper's arm has no such limit). Under an
+acceleration- or jerk-limited profile (``motion_profile``) R is that profile's duration,
+max_i t_i(|q_i - q_start_i|) (``time_law``). S is the fuzzy rewards-and-punishment term on the
+error (eq. 11, ``fuzzy.RewardPunishment``).
 
 Mode "free" constrains only the tool position. Mode "radial" adds the orientation constraint of
 eq. (12)-(13): the tool sweeps from upright by eps = arccos(z . p / |z||p|) towards the goal, so
@@ -34,7 +36,8 @@ from trajplan_ros.kinematics import ArmModel, ToolJacobian
 from trajplan_ros.kinematics.forward import Chain, tool_rows
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.fuzzy import RewardPunishment, shaping_eq9
-from trajplan_ros.planning.time_law import motion_times, servo_law, TimeLaw
+from trajplan_ros.planning.motion_profile import MotionProfile
+from trajplan_ros.planning.time_law import motion_times, TimeLaw
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
            'goal_ray_basis']
@@ -88,7 +91,6 @@ class Problem(NamedTuple):
     reach: float            # m, L of the error (``errors_eq11``)
     start: np.ndarray       # (m,) the planned joints' start angles
     law: TimeLaw            # each joint's time law: R = max_i t_i(|x_i - start_i|) (eq. 10)
-    scale: np.ndarray       # (m,) omega / omega_i, the servo law's ratios (the polish's steps)
     omega: float            # rad/s
     lower: np.ndarray       # (m,) the search box
     upper: np.ndarray       # (m,)
@@ -127,11 +129,14 @@ class Objective:
 
     ``across`` (radial mode): how many components of the tool axis across the goal ray the
     constraints hold at zero; 2, the axis on the ray, but for ``solution_curve``'s curves.
+    ``profile``: the motion's profile and limits (default the paper's servo law); a profile
+    that needs a limit no source gives raises ValueError.
     """
 
     def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
                  mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
-                 shaping: RewardPunishment | None = None, across: int = 2) -> None:
+                 shaping: RewardPunishment | None = None, across: int = 2,
+                 profile: MotionProfile | None = None) -> None:
         self.arm = arm
         self.mode = Mode(mode)
         if type(across) is not int or not 0 <= across <= 2:
@@ -139,6 +144,8 @@ class Objective:
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f'angular velocity must be finite and positive, got {omega}')
         self.omega = float(omega)
+        self.profile = profile if profile is not None else MotionProfile()
+        law = self.profile.time_law(arm, self.omega)
         self.shaping = shaping if shaping is not None else RewardPunishment()
         self.goal = self._check_goal(arm, goal)
         if self.radial and not np.any(self.goal):
@@ -156,16 +163,12 @@ class Objective:
         #: (a continuous joint, or limits of +-2 pi), one turn [w, w + 2 pi] with
         #: w = clip(start - pi, lower, upper - 2 pi): q and q +- 2 pi are the same pose, and that
         #: turn holds, of every pose, the angle within the limits nearest the start.
-        lower, upper = arm.lower[:m], arm.upper[:m]
-        turn = upper - lower > 2.0 * np.pi
-        window = np.clip(self.planned_start - np.pi, lower, upper - 2.0 * np.pi)
-        self.lower = np.where(turn, window, lower)
-        self.upper = np.where(turn, window + 2.0 * np.pi, upper)
-        #: Each planned joint's angular velocity omega_i (rad/s), and omega / omega_i.
-        self.speeds = arm.speeds(self.omega)[:m]
-        self.time_scale = self.omega / self.speeds
-        #: Each planned joint's time law (eq. 10: the servo's, t_i = d / omega_i).
-        self.law = servo_law(self.speeds)
+        self.lower, self.upper = self._search_box(arm.lower[:m], arm.upper[:m],
+                                                  self.planned_start)
+        #: Each planned joint's time law (eq. 10 under the servo profile, t_i = d / omega_i).
+        self.law = TimeLaw(law.kind, *(np.ascontiguousarray(v[:m]) for v in law[1:]))
+        #: Each planned joint's angular velocity omega_i (rad/s).
+        self.speeds = self.law.velocity
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
         #: R of the longest motion the limits allow (s), for the fuzzy rules (Table 1).
         self.longest_time = float(motion_times(self.law, self.upper[None, :], self.lower)[0])
@@ -188,7 +191,7 @@ class Objective:
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
-                               self.law, self.time_scale, self.omega, self.lower, self.upper)
+                               self.law, self.omega, self.lower, self.upper)
 
     def holding(self, across: int) -> Objective:
         """
@@ -201,7 +204,7 @@ class Objective:
         if across not in self._holding:
             self._holding[across] = Objective(self.arm, self.goal, self.start, mode=self.mode,
                                               omega=self.omega, shaping=self.shaping,
-                                              across=across)
+                                              across=across, profile=self.profile)
         return self._holding[across]
 
     @property
@@ -213,6 +216,14 @@ class Objective:
     def radial(self) -> bool:
         """Return True in radial mode (the eq. 12-13 orientation constraint applies)."""
         return self.mode is Mode.RADIAL
+
+    @staticmethod
+    def _search_box(lower: np.ndarray, upper: np.ndarray,
+                    start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the search box of joints with limits lower, upper from ``start``."""
+        turn = upper - lower > 2.0 * np.pi
+        window = np.clip(start - np.pi, lower, upper - 2.0 * np.pi)
+        return np.where(turn, window, lower), np.where(turn, window + 2.0 * np.pi, upper)
 
     @staticmethod
     def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:

@@ -30,9 +30,10 @@ from trajplan_ros.kinematics.jit import warm_up, Warmup
 from trajplan_ros.planning.baselines import de, ga, pso, spso
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.iepso import iepso
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.planning.optimize import Interrupt, OptimizeResult
-from trajplan_ros.planning.trajectory import servo_trajectory, Trajectory
+from trajplan_ros.planning.trajectory import motion_points, motion_trajectory, Trajectory
 
 __all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_AXIS_TOLERANCE',
            'DEFAULT_TOLERANCE', 'describe_residual', 'prepare']
@@ -84,6 +85,7 @@ class PlanResult:
     algorithm: str = 'iepso'
     mode: str = Mode.FREE.value
     omega: float = DEFAULT_OMEGA
+    profile: MotionProfile = field(default_factory=MotionProfile)
     history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     history_error: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
 
@@ -93,11 +95,19 @@ class PlanResult:
         return self.status is PlanStatus.SUCCEEDED
 
     def trajectory(self, arm: ArmModel, sample_period: float = 0.1) -> Trajectory:
-        """Return the fixed-angular-velocity joint trajectory from the start to the joint goal."""
+        """Return the joint trajectory from the start to the joint goal under ``profile``."""
         if self.joint_goal is None or self.start is None:
             raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
-        return servo_trajectory(self.start, self.joint_goal, arm.speeds(self.omega),
-                                sample_period=sample_period, joint_names=arm.joint_names)
+        return motion_trajectory(self.start, self.joint_goal,
+                                 self.profile.time_law(arm, self.omega), self.profile.timing,
+                                 sample_period=sample_period, joint_names=arm.joint_names)
+
+    def trajectory_points(self, arm: ArmModel, sample_period: float = 0.1) -> int:
+        """Return how many points ``trajectory`` has, without building a long one."""
+        if self.joint_goal is None or self.start is None:
+            raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
+        return motion_points(self.start, self.joint_goal, self.profile.time_law(arm, self.omega),
+                             self.profile.timing, sample_period)
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-ready summary (the ``trajplan plan --json`` line); NaN becomes None."""
@@ -118,6 +128,8 @@ class PlanResult:
             'plan_time_s': self.plan_time_s,
             'algorithm': self.algorithm,
             'mode': self.mode,
+            'profile': self.profile.profile.value,
+            'timing': self.profile.timing.value,
             'message': self.message,
         }
 
@@ -129,7 +141,8 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          seed: int | np.random.Generator | None = None, population: int = 40,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
          options: dict[str, Any] | None = None, max_planning_time: float | None = None,
-         stop: Callable[[], bool] | None = None) -> PlanResult:
+         stop: Callable[[], bool] | None = None,
+         profile: MotionProfile | None = None) -> PlanResult:
     """
     Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
 
@@ -144,7 +157,7 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
         ray, pointing outward, too).
     :param algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga",
         "de".
-    :param omega: servo angular velocity (rad/s) of eq. (10).
+    :param omega: servo angular velocity (rad/s) of eq. (10); it caps every joint's velocity.
     :param tolerance: largest position error (m) that counts as reached.
     :param axis_tolerance: in radial mode, largest angle (rad) between the tool axis and the
         goal ray that counts as radial.
@@ -156,6 +169,9 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
     :param max_planning_time: longest search (s, monotonic clock); None: no limit.
     :param stop: asked after every iteration and polish step; True ends the search (Ctrl-C).
+    :param profile: the motion's profile, timing and limits (``MotionProfile``; default the
+        paper's servo law); the planner minimises that profile's duration. A profile that
+        needs a limit no source gives raises ValueError.
     """
     arm = arm if arm is not None else _default_arm()
     mode = Mode(mode)
@@ -164,9 +180,13 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     interrupt = _interrupt(max_planning_time, stop)
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
-    common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega)}
+    profile = profile if profile is not None else MotionProfile()
+    profile.time_law(arm, omega)                 # a profile without its limits: ValueError
+    common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega),
+              'profile': profile}
     try:
-        obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping)
+        obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping,
+                        profile=profile)
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,

@@ -56,6 +56,7 @@ from trajplan_ros.planning.active_set import minimax_step
 from trajplan_ros.planning.linearisation import (line_searches, linearise, minimum_norm_steps,
                                                  residuals_and_jacobians)
 from trajplan_ros.planning.objective import errors_eq11, Objective, Problem
+from trajplan_ros.planning.time_law import tie_scales
 
 __all__ = ['EarlyStop', 'Linearisation', 'NEVER', 'agreeing', 'early_stop', 'linearise_at',
            'polish', 'polish_step', 'settle', 'trial_points']
@@ -258,8 +259,9 @@ def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarra
     Jacobian at x, each within the trust radius.
     """
     base = x + minimum_norm_steps(pinv, c, radius)
+    scale = tie_scales(problem.law, base, problem.start, problem.omega)
     if wide:
-        z = minimax_step(base - problem.start, null, quad, problem.scale,
+        z = minimax_step(base - problem.start, null, quad, scale,
                          problem.lower - base, problem.upper - base, radius, sets.pieces,
                          sets.vertex, sets.clashes, sets.r)
         for k in range(base.shape[0]):
@@ -268,7 +270,7 @@ def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarra
                 for b in range(z.shape[1]):
                     base[k] += z[k, a] * z[k, b] * quad[k, a, b]
     else:
-        base = line_searches(null, quad, base, problem.start, problem.scale, problem.lower,
+        base = line_searches(null, quad, base, problem.start, scale, problem.lower,
                              problem.upper, radius, TIE)
     clip_to_box(problem, base)
     for _ in range(CHORD_STEPS if wide else 1):

@@ -8,7 +8,9 @@ parameter, phi = theta2 + theta3 + theta4 (DH). For each phi there are at most f
 solutions: two base branches (q1 = atan2(y, x) with r = +rho, or q1 +- pi with r = -rho) and two
 elbow branches of the planar a2/a3 pair (doc/paper.md, "The exact reference"). A dense sweep over
 phi followed by zooming in on the best samples gives the true minimum of R (eq. 10) to about
-1e-10 s. The planner never calls this: it only exists to check optimisers independently.
+1e-10 s. R may be any profile's (``motion_profile``): its duration max_i t_i(|q_i - start_i|)
+is what is swept. The planner never calls this: it only exists to check optimisers
+independently.
 """
 from __future__ import annotations
 
@@ -17,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning.motion_profile import MotionProfile
+from trajplan_ros.planning.time_law import motion_times, TimeLaw
 
 __all__ = ['ExactOptimum', 'exact_minimum', 'radial_angle']
 
@@ -75,13 +79,14 @@ def _solutions(arm: ArmModel, goal: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return out
 
 
-def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, omega: float) -> np.ndarray:
+def _times(arm: ArmModel, q: np.ndarray, start: np.ndarray, law: TimeLaw) -> np.ndarray:
     inside = np.all((q >= arm.lower[:4]) & (q <= arm.upper[:4]), axis=-1)
-    t = np.max(np.abs(q - start[:4]), axis=-1) / omega
+    rows = np.ascontiguousarray(np.nan_to_num(q.reshape(-1, 4)))
+    t = motion_times(law, rows, np.ascontiguousarray(start[:4])).reshape(q.shape[:-1])
     return np.where(inside, t, np.inf)
 
 
-def _zoom(arm: ArmModel, goal: np.ndarray, start: np.ndarray, omega: float,
+def _zoom(arm: ArmModel, goal: np.ndarray, start: np.ndarray, law: TimeLaw,
           sweep: tuple[np.ndarray, np.ndarray, np.ndarray], zoom_levels: int,
           tmin: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
@@ -106,15 +111,18 @@ def _zoom(arm: ArmModel, goal: np.ndarray, start: np.ndarray, omega: float,
         step /= 50.0
         phis = np.unique((best[:, None] + np.arange(-100, 101)[None, :] * step).ravel())
         q = _solutions(arm, goal, phis)
-        t = _times(arm, q, start, omega)
+        t = _times(arm, q, start, law)
     q = q.reshape(-1, 4)
-    return q, _times(arm, q, start, omega)
+    return q, _times(arm, q, start, law)
 
 
 def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: float = 0.2,
-                  mode: str = 'free', zoom_levels: int = 5) -> ExactOptimum:
+                  mode: str = 'free', zoom_levels: int = 5,
+                  profile: MotionProfile | None = None) -> ExactOptimum:
     """
-    Return the least R = max|q - start| / omega over in-limit q that reach ``goal`` exactly.
+    Return the least R = max_i t_i(|q_i - start_i|) over in-limit q that reach ``goal`` exactly.
+
+    t_i is ``profile``'s time law at servo velocity ``omega`` (default the servo's, d / omega).
 
     mode "free": sweep phi over [-pi, pi]; mode "radial": the tool axis along the goal ray
     (eq. 12-13, doc/paper.md), so phi = +radial_angle(goal) on the base branch facing the goal
@@ -124,20 +132,22 @@ def exact_minimum(arm: ArmModel, goal: np.ndarray, start: np.ndarray, *, omega: 
     slowest joint does not move along it), by a second zoom over the tied samples.
     """
     _check_family(arm)
+    whole = (profile or MotionProfile()).time_law(arm, omega)
+    law = TimeLaw(whole.kind, *(np.ascontiguousarray(x[:4]) for x in whole[1:]))
     goal = np.asarray(goal, dtype=float)
     start = np.asarray(start, dtype=float)
     if mode == 'radial':
         both = _solutions(arm, goal, np.array([radial_angle(goal), -radial_angle(goal)]))
         q = np.concatenate((both[0, :2], both[1, 2:]))       # facing: +eps; turned: -eps
-        t = _times(arm, q, start, omega)
+        t = _times(arm, q, start, law)
     elif mode == 'free':
         phis = np.linspace(-np.pi, np.pi, 20001)
         solved = _solutions(arm, goal, phis)
-        sweep = (phis, solved, _times(arm, solved, start, omega))
-        q, t = _zoom(arm, goal, start, omega, sweep, zoom_levels)
+        sweep = (phis, solved, _times(arm, solved, start, law))
+        q, t = _zoom(arm, goal, start, law, sweep, zoom_levels)
         tmin = float(t.min())
         if np.count_nonzero(sweep[2] <= tmin * (1 + 1e-9)) > 1:
-            q2, t2 = _zoom(arm, goal, start, omega, sweep, zoom_levels, tmin)   # a tied arc
+            q2, t2 = _zoom(arm, goal, start, law, sweep, zoom_levels, tmin)   # a tied arc
             q, t = np.concatenate((q, q2)), np.concatenate((t, t2))
     else:
         raise ValueError(f"mode must be 'free' or 'radial', got {mode!r}")

@@ -27,7 +27,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ['Trajectory', 'servo_trajectory', 'trajectory_points']
+from trajplan_ros.planning.motion_profile import Timing
+from trajplan_ros.planning.rest_to_rest import joint_profiles, JointProfiles
+from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw
+
+__all__ = ['Trajectory', 'motion_points', 'motion_trajectory', 'servo_trajectory',
+           'trajectory_points']
 
 #: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
 _RESOLUTION = 1e-6
@@ -204,3 +209,132 @@ def _spaced_grid_gaps(first: int, last: int, period: float) -> int:
         times = np.arange(k, min(k + chunk, last) + 1) * period
         count += int(np.count_nonzero(np.diff(times) > _RESOLUTION))
     return count
+
+
+def motion_trajectory(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing, *,
+                      sample_period: float = 0.1,
+                      joint_names: tuple[str, ...] | None = None) -> Trajectory:
+    """
+    Return the motion from ``start`` to ``goal`` under every joint's time ``law`` and ``timing``.
+
+    Servo: ``servo_trajectory`` at each joint's velocity, or (synchronized) at the velocity that
+    brings it to the goal at the end, a straight line. Trapezoidal and jerk-limited: each
+    joint's profile (``rest_to_rest``, its phases whole nanoseconds), with a point at every
+    joint's phase boundary and every ``sample_period`` (a sample within ``_SAMPLE_GAP`` of a
+    boundary left out). Trapezoidal points carry positions and velocities: the controller's
+    cubics are then the profile's quadratics; jerk-limited ones also accelerations: its
+    quintics are the profile's cubics. The last point, at the end, is at rest at the goal.
+
+    Each point's values are the profile's at its time, but a point's position is a double,
+    rounded, and over a short segment (two boundaries close together) a polynomial fitted to
+    rounded ends can have a large acceleration or jerk. So positions are rounded to
+    ``_MANTISSA`` bits, which makes the controller's 3, 12, 20 and 30 times them exact
+    (``_short_mantissas``), and the velocities at both ends of a segment are shifted by the
+    rounding over its duration (``_absorb_rounding``): its polynomial is then the profile's
+    plus a linear term.
+    """
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
+    if law.kind == SERVO:
+        return servo_trajectory(start, goal, _servo_speeds(start, goal, law, timing),
+                                sample_period=sample_period, joint_names=names)
+    profiles = _profiles(start, goal, law, timing)
+    t_ns = _profile_times_ns(profiles, sample_period)
+    turn, velocity, acceleration, _ = profiles.sample(t_ns)
+    positions = _short_mantissas(start + turn)
+    positions[-1] = goal
+    _absorb_rounding(profiles, t_ns, start, positions, velocity)
+    velocity[-1], acceleration[-1] = 0.0, 0.0
+    return Trajectory(tuple(names), start, t_ns / 1e9, positions, velocity,
+                      acceleration if law.kind == JERK_LIMITED else None)
+
+
+def motion_points(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing,
+                  sample_period: float = 0.1) -> int:
+    """
+    Return how many points ``motion_trajectory`` gives, without building a long one.
+
+    Exact but for a trajectory of more than a million sample periods, where it returns the
+    number of periods (fewer than the points: the caller refuses it anyway).
+    """
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    if law.kind == SERVO:
+        return trajectory_points(start, goal, _servo_speeds(start, goal, law, timing),
+                                 sample_period)
+    profiles = _profiles(start, goal, law, timing)
+    periods = float(profiles.ends_ns.max(initial=0)) / 1e9 / sample_period
+    return int(periods) if periods > 1e6 else len(_profile_times_ns(profiles, sample_period))
+
+
+def _servo_speeds(start: np.ndarray, goal: np.ndarray, law: TimeLaw,
+                  timing: Timing) -> np.ndarray:
+    """Return each joint's servo velocity: its own, or (synchronized) d_i / R."""
+    if timing is not Timing.SYNCHRONIZED:
+        return law.velocity
+    d = np.abs(goal - start)
+    duration = float(np.max(d / law.velocity, initial=0.0))
+    return np.where(d > 0.0, d / duration, law.velocity) if duration > 0.0 else law.velocity
+
+
+def _profiles(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing
+              ) -> JointProfiles:
+    """Return each joint's profile, stretched to the slowest joint's end if synchronized."""
+    if start.shape != goal.shape or start.ndim != 1 or law.velocity.shape != start.shape:
+        raise ValueError('start, goal and the time law must be of the same joints')
+    return joint_profiles(goal - start, law.velocity, law.acceleration, law.jerk,
+                          synchronized=timing is Timing.SYNCHRONIZED)
+
+
+#: The least time (ns) between a sample and a phase boundary: a sample closer is left out.
+_SAMPLE_GAP = 1_000_000
+
+
+def _profile_times_ns(profiles: JointProfiles, sample_period: float) -> np.ndarray:
+    """Return the points' times (ns): every phase boundary and the samples apart from them."""
+    if not (np.isfinite(sample_period) and sample_period > 0):
+        raise ValueError('sample_period must be finite and positive')
+    period_ns = sample_period * 1e9
+    end = int(profiles.ends_ns.max(initial=0))
+    if end == 0:
+        return np.array([max(int(round(period_ns)), 1)], dtype=np.int64)
+    corners = profiles.boundaries_ns
+    grid = np.round(np.arange(1, int(end // period_ns) + 1) * period_ns).astype(np.int64)
+    near = np.searchsorted(corners, grid)
+    gap = np.minimum(np.abs(grid - corners[np.minimum(near, corners.size - 1)]),
+                     np.abs(grid - corners[np.maximum(near - 1, 0)]))
+    keep = grid[(gap >= min(_SAMPLE_GAP, period_ns / 4)) & (grid > 0) & (grid < end)]
+    return np.union1d(keep, corners)
+
+
+#: Significant bits of a published profile position (see ``motion_trajectory``).
+_MANTISSA = 48
+
+
+def _short_mantissas(values: np.ndarray) -> np.ndarray:
+    """Return ``values`` rounded to ``_MANTISSA`` significant bits."""
+    fraction, exponent = np.frexp(values)
+    return np.ldexp(np.round(np.ldexp(fraction, _MANTISSA)), exponent - _MANTISSA)
+
+
+def _absorb_rounding(profiles: JointProfiles, t_ns: np.ndarray, start: np.ndarray,
+                     positions: np.ndarray, velocity: np.ndarray) -> None:
+    """
+    Shift the velocities at the points by the rounding of the positions, in place.
+
+    Each segment would take e / T at both its ends: e is the difference between the rounded
+    positions' step and the profile's over the segment (from its start, in the phase that
+    covers it), T its duration; its polynomial would then be the profile's plus a linear
+    term. A point between two segments takes their shifts weighted by 1 / T^2 (what it misses
+    of either costs jerk in proportion): the shorter one's, nearly. The first segment starts
+    at the state at rest, which the controller takes as it is; the last point stays at rest.
+    """
+    before = np.concatenate(([0], t_ns[:-1]))
+    span = (t_ns - before) / 1e9                                     # (T,) s
+    _, vel, acc, jerk = profiles.sample(before)
+    step = span[:, None] * (vel + span[:, None] * (acc / 2.0 + span[:, None] * jerk / 6.0))
+    previous = np.vstack((start, positions[:-1]))
+    shift = ((positions - previous) - step) / span[:, None]         # (T, n) per segment
+    weight = (1.0 / span ** 2)[:, None]
+    # point k ends segment k and starts segment k + 1
+    velocity[:-1] += ((weight[:-1] * shift[:-1] + weight[1:] * shift[1:])
+                      / (weight[:-1] + weight[1:]))

@@ -1,0 +1,160 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Profile trajectories under joint_trajectory_controller's interpolation: within every limit.
+
+Each message is sampled densely as the controller samples it (``controller_interpolation``,
+the first segment from the start at rest): the commanded velocity and acceleration stay within
+each joint's limits to 1e-6 relative and the jerk to 1e-3, the motion starts and ends exactly
+at the start and the goal, at rest. Its duration is Ruckig's fastest for the same move and
+limits, with time synchronisation and without, to 1e-6 s.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from controller_interpolation import ControllerTrajectory, CUBIC, QUINTIC, validate_trajectory_msg
+import numpy as np
+import pytest
+import ruckig
+from trajplan_ros import ArmModel, plan
+from trajplan_ros.planning.motion_profile import MotionProfile, Timing
+from trajplan_ros.planning.rest_to_rest import joint_profiles
+from trajplan_ros.planning.time_law import JERK_LIMITED, motion_times, SERVO, TimeLaw
+from trajplan_ros.planning.trajectory import motion_points, motion_trajectory
+from trajplan_ros.tools.bench.published_arms import PUBLISHED
+
+MS = 1_000_000              # ns per millisecond
+PANDA_LIMITS = Path(__file__).parent / 'data' / 'panda_joint_limits.yaml'
+
+
+def arm_of(name: str) -> ArmModel:
+    """Return a published arm of example-robot-data."""
+    arm = PUBLISHED[name]
+    return ArmModel.from_urdf(arm.urdf, arm.base_link, arm.tip_link)
+
+
+def profiles(name: str) -> dict[str, MotionProfile]:
+    """Return the profiles the tests run on arm ``name``, by label."""
+    if name == 'panda':                  # MoveIt's limits file, jerks included
+        make = lambda **kw: MotionProfile.from_file(PANDA_LIMITS, **kw)  # noqa: E731
+    else:                                # no published limits: the settings for every joint
+        make = lambda **kw: MotionProfile(max_acceleration=12.0, max_jerk=150.0,  # noqa: E731
+                                          **kw)
+    return {f'{p}-{t}': make(profile=p, timing=t)
+            for p in ('trapezoidal', 'jerk_limited') for t in ('independent', 'synchronized')}
+
+
+def ruckig_duration(start: np.ndarray, goal: np.ndarray, law: TimeLaw, synchronized: bool
+                    ) -> float:
+    """Return Ruckig's fastest duration from start to goal at rest, within ``law``'s limits."""
+    n = start.size
+    inp = ruckig.InputParameter(n)
+    inp.current_position, inp.target_position = start.tolist(), goal.tolist()
+    inp.max_velocity, inp.max_acceleration = law.velocity.tolist(), law.acceleration.tolist()
+    inp.max_jerk = law.jerk.tolist()
+    inp.synchronization = (ruckig.Synchronization.Time if synchronized
+                           else ruckig.Synchronization.No)
+    out = ruckig.Trajectory(n)
+    assert ruckig.Ruckig(n).calculate(inp, out) == ruckig.Result.Working
+    return out.duration
+
+
+def check_under_the_controller(start: np.ndarray, goal: np.ndarray, law: TimeLaw,
+                               timing: Timing, names: tuple[str, ...]) -> None:
+    """Check one motion's message under the controller, as the module says."""
+    traj = motion_trajectory(start, goal, law, timing, sample_period=0.1, joint_names=names)
+    msg = traj.to_dict()
+    assert validate_trajectory_msg(msg, joints=names) is None
+    assert len(traj.times) == motion_points(start, goal, law, timing, 0.1)
+    assert np.all(np.diff(traj.nanoseconds) > 0) and traj.nanoseconds[0] > 0
+    assert (traj.accelerations is not None) == (law.kind == JERK_LIMITED)
+    # the duration: Ruckig's fastest (R of the planner's objective) to 1e-6 s
+    fastest = float(motion_times(law, goal[None], start)[0])
+    synchronized = timing is Timing.SYNCHRONIZED
+    assert fastest == pytest.approx(ruckig_duration(start, goal, law, synchronized), abs=1e-9)
+    assert fastest <= traj.duration <= fastest + 1e-6
+    controller = ControllerTrajectory(msg, {'positions': start.tolist(),
+                                            'velocities': [0.0] * start.size,
+                                            'accelerations': [0.0] * start.size})
+    segments = controller.segments()
+    assert {s.kind for s in segments} == {QUINTIC if law.kind == JERK_LIMITED else CUBIC}
+    ends = np.array([[s.t0_ns, s.t0_ns + 1, (s.t0_ns + s.t1_ns) // 2, s.t1_ns - 1]
+                     for s in segments]).ravel()
+    times = np.unique(np.concatenate((np.arange(0, controller.end_ns + 100 * MS, MS), ends)))
+    out = controller.sample(times)
+    assert out.valid.all()
+    assert np.max(np.abs(out.velocities) / law.velocity) <= 1 + 1e-6
+    assert np.max(np.abs(out.accelerations) / law.acceleration) <= 1 + 1e-6
+    if law.kind == JERK_LIMITED:
+        assert max(float(np.max(s.max_abs_jerk() / law.jerk)) for s in segments) <= 1 + 1e-3
+    np.testing.assert_array_equal(out.positions[0], start)
+    after = times >= controller.end_ns
+    held = np.broadcast_to(goal, (int(after.sum()), goal.size))
+    np.testing.assert_array_equal(out.positions[after], held)
+    np.testing.assert_array_equal(out.velocities[after], 0.0)
+    np.testing.assert_array_equal(out.accelerations[after], 0.0)
+
+
+@pytest.mark.parametrize('name', ['panda', 'so101'])
+@pytest.mark.parametrize('label', ['trapezoidal-independent', 'trapezoidal-synchronized',
+                                   'jerk_limited-independent', 'jerk_limited-synchronized'])
+def test_random_moves_keep_every_limit_under_the_controller(name: str, label: str) -> None:
+    arm = arm_of(name)
+    profile = profiles(name)[label]
+    law = profile.time_law(arm, omega=100.0)          # the URDF's and the file's velocities
+    rng = np.random.default_rng(40 + len(label) + len(name))
+    for k in range(25):
+        start, goal = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
+        if k % 5 == 0:
+            goal[::3] = start[::3]                    # some joints stay
+        check_under_the_controller(start, goal, law, profile.timing, arm.joint_names)
+
+
+@pytest.mark.parametrize('name', ['panda', 'so101'])
+def test_planned_motions_keep_every_limit_under_the_controller(name: str) -> None:
+    arm = arm_of(name)
+    rng = np.random.default_rng(7)
+    q, starts = rng.uniform(arm.lower, arm.upper, (2, 4, arm.n_joints))
+    for k, profile in enumerate(profiles(name).values()):
+        result = plan(arm.tool(q[k:k + 1])[0][0], starts[k], arm=arm, omega=100.0,
+                      profile=profile, seed=k)
+        assert result.success, result.message
+        law = profile.time_law(arm, 100.0)
+        assert result.motion_time_s == pytest.approx(
+            ruckig_duration(result.start, result.joint_goal, law, False), abs=1e-9)
+        assert result.to_dict()['profile'] == profile.profile.value
+        traj = result.trajectory(arm)
+        assert result.trajectory_points(arm) == len(traj.times)
+        check_under_the_controller(result.start, result.joint_goal, law, profile.timing,
+                                   arm.joint_names)
+
+
+def test_each_joint_follows_its_own_profile_without_synchronisation() -> None:
+    # independent: a joint that is not the slowest arrives at its own fastest time (up to the
+    # whole nanoseconds and the gaps between boundaries, GAP_NS a few times), not at the end
+    law = TimeLaw(JERK_LIMITED, np.array([1.0, 1.0, 2.0]), np.array([2.0, 2.0, 4.0]),
+                  np.array([20.0, 20.0, 40.0]))
+    start, goal = np.zeros(3), np.array([2.0, 0.3, -0.5])
+    alone = joint_profiles(goal - start, *law[1:]).ends_ns / 1e9
+    together = joint_profiles(goal - start, *law[1:], synchronized=True).ends_ns / 1e9
+    own = [float(motion_times(law._replace(velocity=law.velocity[i:i + 1],
+                                           acceleration=law.acceleration[i:i + 1],
+                                           jerk=law.jerk[i:i + 1]),
+                              goal[None, i:i + 1], start[i:i + 1])[0]) for i in range(3)]
+    assert np.all(alone >= own) and np.all(alone <= np.array(own) + 4e-3)
+    assert alone[1] < alone[0] - 0.5 and alone[2] < alone[0] - 0.5
+    np.testing.assert_array_equal(together, together[0])
+    assert together[0] == pytest.approx(own[0], abs=1e-6)
+
+
+def test_servo_timing_is_the_papers_or_a_straight_line() -> None:
+    law = TimeLaw(SERVO, np.array([0.2, 0.1]), np.full(2, np.inf), np.full(2, np.inf))
+    start, goal = np.zeros(2), np.array([0.4, 0.1])
+    own = motion_trajectory(start, goal, law, Timing.INDEPENDENT)
+    line = motion_trajectory(start, goal, law, Timing.SYNCHRONIZED)
+    assert own.velocities is None and line.velocities is None          # positions only
+    assert own.duration == line.duration == pytest.approx(2.0)
+    np.testing.assert_allclose(line.positions / goal, np.broadcast_to(
+        (line.times / 2.0)[:, None], line.positions.shape), rtol=1e-12)
+    assert own.positions[own.times == 1.0][0][1] == pytest.approx(0.1)   # joint 2 arrived
