@@ -115,6 +115,11 @@ def test_a_valid_change_takes_effect_for_the_next_plan(planner, peer, trajectori
     ('arm.alpha', [0.0, 0.0, 0.0], r'alpha needs 5 values'),
     ('start_positions', [0.0, 0.0, 0.0],
      r'start_positions: a start needs 5 joint angles \(or the 4 planned ones\), got 3'),
+    ('profile', 'trapezoidal', r'trapezoidal profile needs an acceleration limit for joint '
+                               r'joint1'),
+    ('timing', 'later', r'timing must be one of independent, synchronized'),
+    ('joint_limits_file', '/nonexistent/limits.yaml', r'cannot read joint limits'),
+    ('max_acceleration', -1.0, r'out of range'),
 ])
 def test_a_bad_value_is_rejected_with_its_reason(planner, peer, name, value, reason) -> None:
     before = peer.get_parameters(NODE, [name])
@@ -210,3 +215,29 @@ def test_installed_params_file_starts_the_node_with_its_values(
             k: v for k, v in default_values().items() if k not in ('mode', 'sample_period')}
     finally:
         assert node.stop() == 0, node.output
+
+
+def test_a_jerk_limited_motion_is_published_with_its_derivatives(planner, peer,
+                                                                  trajectories) -> None:
+    change = [Parameter('profile', value='jerk_limited'), Parameter('timing', value='synchronized'),
+              Parameter('max_acceleration', value=0.5), Parameter('max_jerk', value=2.0)]
+    [result] = peer.set_parameters(NODE, change, atomically=True)
+    try:
+        assert result.successful, result.reason
+        goal = (0.1, 0.2, 0.2)
+        answer = peer.call(GetPlan, '/arm_ns/plan_trajectory', plan_request(goal))
+        assert answer.plan.poses
+        msg = trajectory_to(trajectories, goal)
+        points = msg.points
+        assert all(len(p.velocities) == len(p.accelerations) == 5 for p in points)
+        assert list(points[-1].velocities) == [0.0] * 5
+        assert list(points[-1].accelerations) == [0.0] * 5
+        velocity = np.abs([p.velocities for p in points])
+        assert velocity.max() <= 0.2 * (1 + 1e-9)                    # omega caps every joint
+        assert np.abs([p.accelerations for p in points]).max() <= 0.5 * (1 + 1e-9)
+    finally:
+        [back] = peer.set_parameters(NODE, [Parameter('profile', value='servo'),
+                                            Parameter('timing', value='independent'),
+                                            Parameter('max_acceleration', value=0.0),
+                                            Parameter('max_jerk', value=0.0)], atomically=True)
+        assert back.successful, back.reason

@@ -76,6 +76,15 @@ def test_defaults_give_the_paper_arm() -> None:
     ({'start_positions': [0.0, np.nan, 0, 0, 0]}, ValueError, r'non-finite angle'),
     ({'arm.sign': [1, 1, 1, 2, 1]}, InvalidArmModel, r'sign must be \+1 or -1'),
     ({'arm.planned': 6}, InvalidArmModel, r'planned joints must be between 2 and 5'),
+    ({'profile': 'smooth'}, ValueError, r'profile must be one of servo, trapezoidal, '
+                                        r'jerk_limited'),
+    ({'profile': 'trapezoidal'}, ValueError,
+     r'the trapezoidal profile needs an acceleration limit for joint joint1: none in the joint '
+     r'limits and no max_acceleration given'),
+    ({'profile': 'jerk_limited', 'max_acceleration': 2.0}, ValueError,
+     r'needs a jerk limit for joint joint1'),
+    ({'joint_limits_file': '/nonexistent/joint_limits.yaml'}, ValueError,
+     r'cannot read joint limits /nonexistent/joint_limits.yaml'),
 ])
 def test_bad_values_are_refused_with_the_reason(change, error, reason) -> None:
     with pytest.raises(error, match=reason):
@@ -110,3 +119,20 @@ def test_start_positions_that_do_not_fit_a_described_chain() -> None:
     np.testing.assert_array_equal(lenient.start,
                                   np.clip(np.zeros(5), lenient.arm.lower, lenient.arm.upper))
     assert lenient.base_frame == 'base_link'
+
+
+def test_the_motion_comes_from_its_parameters_and_the_limits_file(tmp_path: Path) -> None:
+    limits = tmp_path / 'joint_limits.yaml'
+    limits.write_text('joint_limits:\n  joint2:\n    has_acceleration_limits: true\n'
+                      '    max_acceleration: 1\n', encoding='utf-8')
+    values = {**default_values(), 'profile': 'trapezoidal', 'timing': 'synchronized',
+              'joint_limits_file': str(limits), 'max_acceleration': 3.0}
+    profile = Settings.from_parameters(values).profile
+    assert profile.describe() == 'trapezoidal, synchronized'
+    law = profile.time_law(paper_arm(), 0.2)
+    np.testing.assert_array_equal(law.acceleration, [3.0, 1.0, 3.0, 3.0, 3.0])
+    assert Settings.from_parameters(default_values()).profile.describe() == 'servo, independent'
+    limits.write_text('joint_limits:\n  shoulder:\n    has_jerk_limits: true\n    max_jerk: 1\n',
+                      encoding='utf-8')
+    with pytest.raises(ValueError, match='the arm does not have: shoulder'):
+        Settings.from_parameters(values)

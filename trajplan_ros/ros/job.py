@@ -14,7 +14,7 @@ from typing import Callable, Sequence
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from std_msgs.msg import Header
-from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory, trajectory_points
+from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import path_msg
@@ -71,15 +71,14 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                   omega=s.omega, tolerance=job.tolerance or s.tolerance,
                   axis_tolerance=s.axis_tolerance, seed=s.seed,
                   population=s.population, max_iter=s.max_iter,
-                  max_planning_time=s.max_planning_time, stop=stop)
+                  max_planning_time=s.max_planning_time, stop=stop, profile=s.profile)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     timed = result.plan_time_s if result.joint_goal is not None else None
     if not result.success:
         return Outcome(False, _refusal(where, result, took), result.status.value,
                        result.message, plan_time_s=timed,
                        timed_out=result.status is PlanStatus.TIMED_OUT)
-    points = trajectory_points(result.start, result.joint_goal, s.arm.speeds(s.omega),
-                               s.sample_period)
+    points = result.trajectory_points(s.arm, s.sample_period)
     if points > s.max_trajectory_points:
         reason = (f'the trajectory would need {points} points, more than '
                   f'max_trajectory_points {s.max_trajectory_points} (motion '

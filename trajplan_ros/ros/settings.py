@@ -20,13 +20,14 @@ parameters (the paper arm) apply.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import functools
 from typing import Any, Mapping
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
+from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
 
 
@@ -85,8 +86,25 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('tool_axis', [0.0, 0.0, 1.0],
                   'tool axis in the tip link frame (radial mode uses it)'),
     *_arm_specs(),
-    ParameterSpec('angular_velocity', DEFAULT_OMEGA, 'servo angular velocity omega, rad/s',
+    ParameterSpec('angular_velocity', DEFAULT_OMEGA,
+                  'servo angular velocity omega, rad/s; it caps every joint\'s velocity limit',
                   bounds=(1e-3, 10.0)),
+    ParameterSpec('profile', Profile.SERVO.value,
+                  'each joint\'s velocity profile: servo (eq. 10), trapezoidal (acceleration '
+                  'limits) or jerk_limited; the planner minimises its duration',
+                  choices=tuple(p.value for p in Profile)),
+    ParameterSpec('timing', Timing.INDEPENDENT.value,
+                  'independent: each joint stops at its own time; synchronized: all together',
+                  choices=tuple(t.value for t in Timing)),
+    ParameterSpec('joint_limits_file', '',
+                  "MoveIt's joint_limits.yaml (per-joint max_velocity, max_acceleration, "
+                  'max_jerk); empty: none'),
+    ParameterSpec('max_acceleration', 0.0,
+                  'acceleration limit of every joint joint_limits_file gives none, rad/s^2; '
+                  '0: none', bounds=(0.0, 1e6)),
+    ParameterSpec('max_jerk', 0.0,
+                  'jerk limit of every joint joint_limits_file gives none, rad/s^3; 0: none',
+                  bounds=(0.0, 1e9)),
     ParameterSpec('mode', Mode.FREE.value,
                   'free: position only; radial: the tool axis along the goal ray too (eq. 12-13)',
                   choices=tuple(m.value for m in Mode)),
@@ -142,6 +160,8 @@ class Settings:
     max_trajectory_points: int
     max_queued_calls: int
     diagnostic_period: float
+    #: The motion's profile, timing and limits.
+    profile: MotionProfile = field(default_factory=MotionProfile)
     #: The URDF the arm was built from ('' for the DH parameters).
     description: str = ''
     #: start_positions did not fit the described chain and all zeros stand in for it.
@@ -190,7 +210,12 @@ class Settings:
                              '(change both at once)') from None
         if not np.all(np.isfinite(start)):
             raise ValueError(f'start_positions has a non-finite angle: {start.tolist()}')
-        return cls(arm=arm, omega=values['angular_velocity'], mode=values['mode'],
+        profile = MotionProfile.from_file(
+            values['joint_limits_file'] or None, profile=values['profile'],
+            timing=values['timing'], max_acceleration=values['max_acceleration'] or None,
+            max_jerk=values['max_jerk'] or None)
+        profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
+        return cls(profile=profile, arm=arm, omega=values['angular_velocity'], mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],

@@ -7,9 +7,10 @@ import argparse
 import math
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
 
-__all__ = ['UsageError', 'add_arm_arguments', 'arm_from_arguments', 'finite_number',
-           'positive_count']
+__all__ = ['UsageError', 'add_arm_arguments', 'add_motion_arguments', 'arm_from_arguments',
+           'finite_number', 'motion_from_arguments', 'positive_count']
 
 
 class UsageError(Exception):
@@ -64,3 +65,29 @@ def arm_from_arguments(args: argparse.Namespace) -> ArmModel:
         return paper_arm()
     return ArmModel.from_urdf(args.urdf, args.base_link, args.tip_link,
                               tool_offset=args.tool_offset, tool_axis=args.tool_axis)
+
+
+def add_motion_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add --profile, --timing, --joint-limits, --max-acceleration and --max-jerk."""
+    group = parser.add_argument_group('motion (default: the paper\'s servo law, eq. 10)')
+    group.add_argument('--profile', choices=[p.value for p in Profile], default='servo',
+                       help='each joint\'s velocity profile: servo (starts and stops at once), '
+                            'trapezoidal (acceleration-limited) or jerk_limited; the planner '
+                            'minimises its duration (default %(default)s)')
+    group.add_argument('--timing', choices=[t.value for t in Timing], default='independent',
+                       help='independent: each joint stops at its own time; synchronized: all '
+                            'arrive together (default %(default)s)')
+    group.add_argument('--joint-limits', metavar='FILE',
+                       help="MoveIt's joint_limits.yaml: per-joint max_velocity, "
+                            'max_acceleration, max_jerk')
+    group.add_argument('--max-acceleration', type=finite_number, metavar='RAD_S2',
+                       help='acceleration limit of every joint the file gives none, rad/s^2')
+    group.add_argument('--max-jerk', type=finite_number, metavar='RAD_S3',
+                       help='jerk limit of every joint the file gives none, rad/s^3')
+
+
+def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
+    """Return the motion the arguments set (ValueError with the reason)."""
+    return MotionProfile.from_file(args.joint_limits, profile=args.profile, timing=args.timing,
+                                   max_acceleration=args.max_acceleration,
+                                   max_jerk=args.max_jerk)

@@ -17,10 +17,10 @@ from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanResult, PlanStatus, prepare)
-from trajplan_ros.planning.trajectory import trajectory_points
 from trajplan_ros.tools import bench, demo, figures, node_commands
-from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, finite_number,
-                                          positive_count, UsageError)
+from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
+                                          arm_from_arguments, finite_number,
+                                          motion_from_arguments, positive_count, UsageError)
 
 
 __all__ = ['main', 'build_parser']
@@ -62,6 +62,7 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                    help='a longer trajectory is not built: "trajectory" is null and the '
                         "message says why (default %(default)s, the node's default)")
     add_arm_arguments(p)
+    add_motion_arguments(p)
     p.set_defaults(run=_run_plan)
 
 
@@ -138,7 +139,8 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
     if result.joint_goal is not None:
         lines.append('joint goal [rad]: ' + '  '.join(
             f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
-        lines.append(f'motion time {result.motion_time_s:.4f} s, position error '
+        lines.append(f'motion time {result.motion_time_s:.4f} s '
+                     f'({result.profile.describe()}), position error '
                      f"{describe_residual(result.position_error_m, 'm')}, efficiency F "
                      f'{result.efficiency:.4f}, '
                      f'{result.iterations} iterations, '
@@ -158,8 +160,7 @@ def _record(result: PlanResult, line: int | None, arm: ArmModel,
     if args.trajectory:
         record['trajectory'] = None
         if result.success:
-            points = trajectory_points(result.start, result.joint_goal,
-                                       arm.speeds(args.angular_velocity), args.sample_period)
+            points = result.trajectory_points(arm, args.sample_period)
             if points <= args.max_trajectory_points:
                 record['trajectory'] = result.trajectory(arm, args.sample_period).to_dict()
             else:
@@ -178,7 +179,8 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
               ) -> dict[str, Any]:
     """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
-                          start=None, algorithm=args.algorithm, mode=args.mode)
+                          start=None, algorithm=args.algorithm, mode=args.mode,
+                          omega=args.angular_velocity, profile=args.motion)
     return {**_record(rejected, line, arm, args), 'goal': None}
 
 
@@ -188,9 +190,12 @@ def _run_plan(args: argparse.Namespace) -> int:
         raise UsageError('--trajectory needs --json')
     if not (args.angular_velocity > 0 and args.sample_period > 0):
         raise UsageError('--angular-velocity and --sample-period must be positive')
+    args.motion = motion_from_arguments(args)
+    args.motion.time_law(arm, args.angular_velocity)       # the limits it needs: ValueError
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
-                'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity}
+                'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity,
+                'profile': args.motion}
     kernels = prepare()
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
