@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.paper_experiment import PAPER_TABLE5
 from trajplan_ros.planning.planner import plan
@@ -217,8 +218,10 @@ def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(
     np.random.seed(123)
     state = np.random.get_state()[1].copy()
     case = paper_case(ARM, Mode.FREE, 7)
-    a = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
-    b = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed)
+    a = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed,
+                                  MotionProfile())
+    b = METHODS['pyswarms'].solve(ARM, Mode.FREE, case.goal, case.start, case.seed,
+                                  MotionProfile())
     assert np.array_equal(a.x, b.x) and a.x.shape == (4,)
     assert list(tmp_path.iterdir()) == []                              # no ./report.log
     assert logging.getLogger().handlers == handlers and logging.getLogger().level == level
@@ -231,6 +234,7 @@ def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(
 _FRESH_PYSWARMS = """
 import logging, os, sys
 from trajplan_ros.kinematics import paper_arm
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import load, METHODS
@@ -239,7 +243,8 @@ before = (list(root.handlers), root.level)
 assert 'pyswarms' not in sys.modules
 load([METHODS['pyswarms']])
 case = paper_case(paper_arm(), Mode.FREE, 7)
-METHODS['pyswarms'].solve(paper_arm(), Mode.FREE, case.goal, case.start, case.seed)
+METHODS['pyswarms'].solve(paper_arm(), Mode.FREE, case.goal, case.start, case.seed,
+                          MotionProfile())
 print(before == (list(root.handlers), root.level), os.environ.get('LOG_CFG'), os.listdir())
 from pyswarms.utils import Reporter
 Reporter()

@@ -218,8 +218,9 @@ def test_installed_params_file_starts_the_node_with_its_values(
 
 
 def test_a_jerk_limited_motion_is_published_with_its_derivatives(planner, peer,
-                                                                  trajectories) -> None:
-    change = [Parameter('profile', value='jerk_limited'), Parameter('timing', value='synchronized'),
+                                                                 trajectories) -> None:
+    change = [Parameter('profile', value='jerk_limited'),
+              Parameter('timing', value='synchronized'),
               Parameter('max_acceleration', value=0.5), Parameter('max_jerk', value=2.0)]
     [result] = peer.set_parameters(NODE, change, atomically=True)
     try:

@@ -87,10 +87,10 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   'tool axis in the tip link frame (radial mode uses it)'),
     *_arm_specs(),
     ParameterSpec('angular_velocity', DEFAULT_OMEGA,
-                  'servo angular velocity omega, rad/s; it caps every joint\'s velocity limit',
+                  "servo angular velocity omega, rad/s; it caps every joint's velocity limit",
                   bounds=(1e-3, 10.0)),
     ParameterSpec('profile', Profile.SERVO.value,
-                  'each joint\'s velocity profile: servo (eq. 10), trapezoidal (acceleration '
+                  "each joint's velocity profile: servo (eq. 10), trapezoidal (acceleration "
                   'limits) or jerk_limited; the planner minimises its duration',
                   choices=tuple(p.value for p in Profile)),
     ParameterSpec('timing', Timing.INDEPENDENT.value,

@@ -69,9 +69,9 @@ def arm_from_arguments(args: argparse.Namespace) -> ArmModel:
 
 def add_motion_arguments(parser: argparse.ArgumentParser) -> None:
     """Add --profile, --timing, --joint-limits, --max-acceleration and --max-jerk."""
-    group = parser.add_argument_group('motion (default: the paper\'s servo law, eq. 10)')
+    group = parser.add_argument_group("motion (default: the paper's servo law, eq. 10)")
     group.add_argument('--profile', choices=[p.value for p in Profile], default='servo',
-                       help='each joint\'s velocity profile: servo (starts and stops at once), '
+                       help="each joint's velocity profile: servo (starts and stops at once), "
                             'trapezoidal (acceleration-limited) or jerk_limited; the planner '
                             'minimises its duration (default %(default)s)')
     group.add_argument('--timing', choices=[t.value for t in Timing], default='independent',

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode
 from trajplan_ros.tools.bench.methods import Answer, Method
 
@@ -96,8 +97,13 @@ class _Child:
         return json.loads(line)
 
     def solve(self, arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int) -> Answer:
-        """Plan ``goal`` from ``start`` in the child; the answer carries the child's time."""
+              seed: int, profile: MotionProfile) -> Answer:
+        """
+        Plan ``goal`` from ``start`` in the child; the answer carries the child's time.
+
+        The child plans the servo law whatever ``profile`` (an older version may know no other):
+        its row is there for the plan time.
+        """
         if arm is not self._arm:
             self._ask({'arm': _arm_spec(arm)})
             self._arm = arm

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.planning.reference import exact_minimum, ExactOptimum
@@ -94,7 +95,7 @@ def _goal(arm: ArmModel, q: np.ndarray, mode: Mode, only: str,
 
 
 def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
-               only: str = 'all') -> list[Case]:
+               only: str = 'all', profile: MotionProfile | None = None) -> list[Case]:
     """
     Draw ``n`` goals of the kind ``only`` (``DRAWS``; see the module docstring).
 
@@ -115,7 +116,7 @@ def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: 
         plan_seed = int(rng.integers(2 ** 31))
         if not np.all(np.isfinite(goal)):
             continue
-        exact = exact_minimum(arm, goal, start, mode=mode.value)
+        exact = exact_minimum(arm, goal, start, mode=mode.value, profile=profile)
         solved = np.isfinite(exact.motion_time_s)
         if (only == 'no-solution') != solved and (only != 'limit-optima' or _on_limit(arm, exact)):
             cases.append(Case(goal, start, exact, plan_seed, seed))
@@ -125,8 +126,9 @@ def draw_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: 
     return cases
 
 
-def paper_case(arm: ArmModel, mode: Mode, seed: int) -> Case:
+def paper_case(arm: ArmModel, mode: Mode, seed: int,
+               profile: MotionProfile | None = None) -> Case:
     """Return the paper's experiment: its target from the upright pose q = 0."""
     start = np.zeros(arm.n_joints)
-    return Case(PAPER_TARGET, start, exact_minimum(arm, PAPER_TARGET, start, mode=mode.value),
-                seed)
+    exact = exact_minimum(arm, PAPER_TARGET, start, mode=mode.value, profile=profile)
+    return Case(PAPER_TARGET, start, exact, seed)

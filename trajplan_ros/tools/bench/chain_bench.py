@@ -7,7 +7,8 @@ Goals are the tool positions of seeded random in-limit configurations (continuou
 pi of 0); starts are q = 0 clipped into the limits, or random in-limit configurations. These
 arms have no exact minimum, so each goal gets a reference (``minimax_reference``): a multi-start
 local solve of min t subject to fk(q) = goal (and the tool axis on the goal ray in radial mode),
-|q_i - s_i| <= omega_i t and the limits, by scipy's SLSQP from ``starts`` random points. In
+|q_i - s_i| <= t_i^-1(t) (omega_i t under the servo law) and the limits, by scipy's SLSQP from
+``starts`` random points. In
 radial mode a goal is kept only when the reference finds a radial pose. The reference lives in
 the bench only.
 
@@ -28,7 +29,9 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
+from trajplan_ros.planning.time_law import joint_reach, SERVO
 from trajplan_ros.tools.bench.methods import Answer, Method
 from trajplan_ros.tools.bench.report import format_table
 from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP
@@ -62,7 +65,7 @@ def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
     Also return its joint goal. The start (clipped into the search box) is one more point: the
     fastest joint goal can lie in a narrow basin beside it, which random points miss (a Panda
     goal at 2.09 s, where 48 random points found 7.34 s). The problem is min t over (x, t)
-    subject to c(x) = 0 (``Objective.residuals``), omega_i t >= |x_i - s_i| and the search
+    subject to c(x) = 0 (``Objective.residuals``), t_i^-1(t) >= |x_i - s_i| and the search
     box; a solve counts when its error is below 1e-9 m (and, in radial mode, its axis within
     1e-9 rad of the goal ray). The search box is the objective's (one turn for a joint with a
     wider range). (inf, None) when no solve counts.
@@ -89,7 +92,7 @@ def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
     """
     from scipy.optimize import least_squares, minimize
 
-    m, s, speeds = obj.lower.size, obj.start[: obj.lower.size], obj.speeds
+    m, s = obj.lower.size, obj.start[: obj.lower.size]
     rows, rank, idle = _moving_rows(obj)
 
     def residuals(z: np.ndarray) -> np.ndarray:
@@ -102,11 +105,18 @@ def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
 
     x = None
     if len(rows) <= rank:
-        slow = np.hstack((-np.eye(m), speeds[:, None]))             # omega t - (x - s) >= 0
-        fast = np.hstack((np.eye(m), speeds[:, None]))              # omega t + (x - s) >= 0
+        reach = _reach(obj)
+
+        def slack(z: np.ndarray) -> np.ndarray:          # t_i^-1(t) -+ (x - s) >= 0
+            ahead = reach(z[-1])[0]
+            return np.concatenate((ahead - (z[:m] - s), ahead + (z[:m] - s)))
+
+        def slack_jacobian(z: np.ndarray) -> np.ndarray:
+            rate = reach(z[-1])[1][:, None]
+            return np.vstack((np.hstack((-np.eye(m), rate)), np.hstack((np.eye(m), rate))))
+
         constraints = [{'type': 'eq', 'fun': residuals, 'jac': jacobian},
-                       {'type': 'ineq', 'fun': lambda z: slow @ z + s, 'jac': lambda z: slow},
-                       {'type': 'ineq', 'fun': lambda z: fast @ z - s, 'jac': lambda z: fast}]
+                       {'type': 'ineq', 'fun': slack, 'jac': slack_jacobian}]
         bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
         z0 = np.append(x0, obj.motion_time(x0[None])[0])
         x = _on_goal(obj, minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1],
@@ -118,6 +128,25 @@ def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
                                         bounds=(obj.lower, obj.upper), xtol=1e-15, ftol=1e-15,
                                         gtol=1e-15).x)
     return x
+
+
+def _reach(obj: Objective) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+    """
+    Return t -> (t_i^-1(t), its derivative) for each planned joint, from ``time_law``'s kernel.
+
+    The derivative by a central difference (the reference's gradients need not be exact), but
+    under the servo law, v_i.
+    """
+    law = obj.law
+
+    def reach(t: float) -> tuple[np.ndarray, np.ndarray]:
+        if law.kind == SERVO:
+            return law.velocity * t, law.velocity
+        h = 1e-7 * max(t, 1e-3)
+        at = [[joint_reach(law, i, max(x, 0.0)) for i in range(obj.lower.size)]
+              for x in (t, t - h, t + h)]
+        return np.array(at[0]), (np.array(at[2]) - np.array(at[1])) / (2.0 * h)
+    return reach
 
 
 def _on_goal(obj: Objective, x: np.ndarray) -> np.ndarray | None:
@@ -152,8 +181,8 @@ def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
 
 
 def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
-                     starts: int = 24, progress: Callable[[], object] | None = None
-                     ) -> tuple[list[ChainCase], int]:
+                     starts: int = 24, progress: Callable[[], object] | None = None,
+                     profile: MotionProfile | None = None) -> tuple[list[ChainCase], int]:
     """
     Draw ``n`` goals and their references (module docstring); also return how many were dropped.
 
@@ -172,7 +201,7 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
         start = q[1] if random_starts else np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
         plan_seed = int(rng.integers(2 ** 31))
         try:
-            obj = Objective(arm, goal, start, mode=mode)
+            obj = Objective(arm, goal, start, mode=mode, profile=profile)
         except InvalidRequest:
             dropped += 1
             continue
@@ -248,8 +277,8 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
         path += [joint.name, joint.child]
     state: dict[str, object] = {}
 
-    def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int) -> Answer:
+    def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
+              profile: MotionProfile) -> Answer:
         if 'chain' not in state:
             import ikpy.chain
 
@@ -273,37 +302,38 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
                   'minimisation)', solve, 'ikpy', 'ikpy.chain')
 
 
-def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase
+def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: MotionProfile
           ) -> tuple[np.ndarray, float | None]:
     """Return the method's answer as every joint's angle, and its own time if it has one."""
-    answer = method.solve(arm, mode, case.goal, case.start, case.seed)
+    answer = method.solve(arm, mode, case.goal, case.start, case.seed, profile)
     if answer.joints is not None:
         return answer.joints, answer.seconds
     if answer.plan is not None:
         return answer.plan.joint_goal, answer.seconds
-    return Objective(arm, case.goal, case.start, mode=mode).full(answer.x)[0], answer.seconds
+    obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
+    return obj.full(answer.x)[0], answer.seconds
 
 
 def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmModel,
-              mode: Mode, fk: IndependentFk, step: Callable[[], object] | None = None
-              ) -> dict[str, ChainResults]:
+              mode: Mode, fk: IndependentFk, step: Callable[[], object] | None = None,
+              profile: MotionProfile | None = None) -> dict[str, ChainResults]:
     """Run every method on every case, taking turns goal by goal; score by ``fk``."""
     n = len(cases)
     out = {m.name: ChainResults(np.full((n, arm.n_joints), np.nan),
                                 *(np.full(n, np.nan) for _ in range(4))) for m in methods}
     for k, case in enumerate(cases):
-        obj = Objective(arm, case.goal, case.start, mode=mode)
+        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
         for method in methods:
             clock = time.perf_counter()
-            q, seconds = _full(arm, method, mode, case)
+            q, seconds = _full(arm, method, mode, case, obj.profile)
             res = out[method.name]
             res.seconds[k] = time.perf_counter() - clock if seconds is None else seconds
             res.q[k] = q
             p, u = fk.tool(q)
             res.error[k] = np.linalg.norm(p - case.goal)
             res.axis_error[k] = obj.axis_angle(u[None])[0] if obj.radial else 0.0
-            moved = np.abs(q - case.start)[: obj.arm.planned] * obj.time_scale
-            res.gap[k] = np.max(moved) / obj.omega / case.reference_time - 1.0
+            moved = obj.motion_time(q[None, : obj.arm.planned])[0]
+            res.gap[k] = moved / case.reference_time - 1.0
         if step is not None:
             step()
     return out

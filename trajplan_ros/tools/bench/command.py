@@ -14,6 +14,10 @@ out like Table 5 beside the printed values, with the with/without-reward compari
 
 ``--urdf`` benchmarks a URDF chain instead (``chain_bench``): no exact minimum there, so a
 multi-start SLSQP solve is the reference, and the rows are IEPSO, scipy DE, pyswarms and ikpy.
+
+``--profile`` (with ``--timing``, ``--joint-limits``, ``--max-acceleration``, ``--max-jerk``)
+plans and scores every method under that motion profile, the references too; a ``--baseline``
+row plans the servo law (an older version may know no other), for its plan time only.
 """
 from __future__ import annotations
 
@@ -26,8 +30,9 @@ from typing import Sequence
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning.objective import Mode
 from trajplan_ros.planning.planner import prepare
-from trajplan_ros.tools.arguments import (add_arm_arguments, arm_from_arguments, positive_count,
-                                          UsageError)
+from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
+                                          arm_from_arguments, motion_from_arguments,
+                                          positive_count, UsageError)
 from trajplan_ros.tools.bench.baseline import baseline_method
 from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
 from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain, ikpy_method,
@@ -102,6 +107,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--reference-starts', type=positive_count, default=24, metavar='N',
                    help='with --urdf: SLSQP starts of the reference per goal (default 24)')
     add_arm_arguments(p)
+    add_motion_arguments(p)
     p.set_defaults(run=_run)
 
 
@@ -136,7 +142,7 @@ def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
                 or args.sets != 1):
             raise UsageError('--paper is one fixed target: use --runs, not --goals, --quick, '
                              '--random-starts, --only or --sets')
-        first = paper_case(arm, mode, args.seed)
+        first = paper_case(arm, mode, args.seed, args.motion)
         print(format_paper_heading(mode, args.seed, args.runs))
         return [replace(first, seed=args.seed + r) for r in range(args.runs)]
     if args.runs != 1:
@@ -145,26 +151,35 @@ def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
     try:
         cases = [case for seed in range(args.seed, args.seed + args.sets)
                  for case in draw_cases(arm, n, mode=mode, random_starts=args.random_starts,
-                                        seed=seed, only=args.only)]
+                                        seed=seed, only=args.only, profile=args.motion)]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    print(format_goals_heading(n, mode, args.random_starts, args.seed, args.only, args.sets))
+    print(format_goals_heading(n, mode, args.random_starts, args.seed, args.only, args.sets)
+          + _motion_note(args))
     return cases
 
 
+def _motion_note(args: argparse.Namespace) -> str:
+    """Return what the heading says of the motion profile: nothing for the servo law."""
+    if args.motion.profile.value == 'servo' and args.motion.timing.value == 'independent':
+        return ''
+    return f' Motion: {args.motion.describe()} profile.'
+
+
 def _run_with_progress(methods: Sequence[Method], cases: Sequence[Case], arm: ArmModel,
-                       mode: Mode, *, unit: str, quiet: bool) -> dict[str, Results]:
-    """Run the benchmark with a tqdm progress bar on stderr, unless ``quiet``."""
-    if quiet:
-        return run(methods, cases, arm, mode)
+                       mode: Mode, *, unit: str, args: argparse.Namespace
+                       ) -> dict[str, Results]:
+    """Run the benchmark with a tqdm progress bar on stderr, unless ``--quiet``."""
+    if args.quiet:
+        return run(methods, cases, arm, mode, profile=args.motion)
     if importlib.util.find_spec('tqdm') is None:
         print("bench: no progress bar without tqdm (pip install tqdm, or the package's 'bench' "
               'extra)', file=sys.stderr)
-        return run(methods, cases, arm, mode)
+        return run(methods, cases, arm, mode, profile=args.motion)
     from tqdm import tqdm
 
     with tqdm(total=len(cases), desc='bench', unit=unit, file=sys.stderr) as bar:
-        return run(methods, cases, arm, mode, step=bar.update)
+        return run(methods, cases, arm, mode, step=bar.update, profile=args.motion)
 
 
 def _report(args: argparse.Namespace, results: dict[str, Results], cases: Sequence[Case],
@@ -195,11 +210,13 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
     starts = 'random in-limit starts' if args.random_starts else 'q = 0 (clipped into limits)'
     print(f'trajplan bench --urdf: {n} goals, {arm.n_joints}-joint chain {arm.base_link} -> '
           f'{arm.tip_link} ({", ".join(arm.joint_names)}), {mode.value} mode, {starts}, seed '
-          f'{args.seed}; reference: best of {args.reference_starts} SLSQP starts per goal.')
+          f'{args.seed}; reference: best of {args.reference_starts} SLSQP starts per goal.'
+          + _motion_note(args))
     fk = IndependentFk(args.urdf, arm)
     try:
         cases, dropped = draw_chain_cases(arm, n, mode=mode, random_starts=args.random_starts,
-                                          seed=args.seed, starts=args.reference_starts)
+                                          seed=args.seed, starts=args.reference_starts,
+                                          profile=args.motion)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if dropped:
@@ -208,12 +225,13 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
     print("success = error <= 1 um by yourdfpy's FK (radial: axis within 1e-6 rad of the goal "
           'ray) and motion time at most 0.1 % above the reference; time = wall time per plan.\n')
     if args.quiet or importlib.util.find_spec('tqdm') is None:
-        results = run_chain(methods, cases, arm, mode, fk)
+        results = run_chain(methods, cases, arm, mode, fk, profile=args.motion)
     else:
         from tqdm import tqdm
 
         with tqdm(total=len(cases), desc='bench', unit='goal', file=sys.stderr) as bar:
-            results = run_chain(methods, cases, arm, mode, fk, step=bar.update)
+            results = run_chain(methods, cases, arm, mode, fk, step=bar.update,
+                                profile=args.motion)
     print(format_chain(results, cases))
     for note in notes:
         print(note)
@@ -222,6 +240,8 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
 
 def _run(args: argparse.Namespace) -> int:
     arm, mode = arm_from_arguments(args), Mode(args.mode)
+    args.motion = motion_from_arguments(args)
+    args.motion.time_law(arm, 0.2)          # a profile without the limits it needs: refused
     methods, notes = _chosen_methods(args, arm)
     prepare()                      # compile or load the kernels now, not in the first timed plan
     if args.urdf:
@@ -231,7 +251,7 @@ def _run(args: argparse.Namespace) -> int:
     cases = _cases(args, arm, mode)
     print(format_criteria() + '\n')
     results = _run_with_progress(methods, cases, arm, mode, unit='run' if args.paper else 'goal',
-                                 quiet=args.quiet)
+                                 args=args)
     _report(args, results, cases, arm, mode)
     for note in notes:
         print(note)

@@ -27,6 +27,7 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.planning.fuzzy import RewardPunishment
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import ALGORITHMS, plan, PlanResult
 
@@ -60,13 +61,13 @@ class Answer:
     seconds: float | None = None
 
 
-Solver = Callable[[ArmModel, Mode, np.ndarray, np.ndarray, int], Answer]
+Solver = Callable[[ArmModel, Mode, np.ndarray, np.ndarray, int, MotionProfile], Answer]
 
 
 @dataclass(frozen=True)
 class Method:
     """
-    A row of the benchmark: ``solve(arm, mode, goal, start, seed)``.
+    A row of the benchmark: ``solve(arm, mode, goal, start, seed, profile)``.
 
     ``requires`` names the optional package the method needs and ``imports`` the module it
     imports when it runs (``load`` imports it before the timed calls).
@@ -118,20 +119,21 @@ def load(methods: Sequence[Method]) -> None:
 
 
 def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None,
-          arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int) -> Answer:
+          arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
+          profile: MotionProfile) -> Answer:
     result = plan(goal, start, arm=arm, mode=mode, algorithm=algorithm, seed=seed,
-                  shaping=shaping, options=options)
+                  shaping=shaping, options=options, profile=profile)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
     planned = arm.without_idle_tail(mode is Mode.RADIAL).planned      # as the objective plans
     return Answer(result.joint_goal[:planned], result)
 
 
-def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int) -> Answer:
+def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
+              profile: MotionProfile) -> Answer:
     from scipy.optimize import differential_evolution
 
-    obj = Objective(arm, goal, start, mode=mode)
+    obj = Objective(arm, goal, start, mode=mode, profile=profile)
     # vectorized: x is (planned, S) for a generation and (planned, 1) while polishing
     found = differential_evolution(lambda x: obj(x.T).efficiency, list(zip(obj.lower, obj.upper)),
                                    vectorized=True, updating='deferred', polish=True,
@@ -139,9 +141,9 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
     return Answer(np.asarray(found.x))
 
 
-def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int) -> Answer:
-    obj = Objective(arm, goal, start, mode=mode)
+def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
+              profile: MotionProfile) -> Answer:
+    obj = Objective(arm, goal, start, mode=mode, profile=profile)
     state = np.random.get_state()             # pyswarms draws from numpy's global generator
     np.random.seed(seed)
     try:

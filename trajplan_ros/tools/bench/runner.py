@@ -21,6 +21,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import PlanResult
 from trajplan_ros.tools.bench.cases import Case
@@ -90,18 +91,21 @@ def _score(res: Results, k: int, obj: Objective, answer: Answer, case: Case) -> 
 
 
 def run(methods: Sequence[Method], cases: Sequence[Case], arm: ArmModel, mode: Mode,
-        step: Callable[[], object] | None = None) -> dict[str, Results]:
+        step: Callable[[], object] | None = None,
+        profile: MotionProfile | None = None) -> dict[str, Results]:
     """
     Run every method on every case, taking turns goal by goal; score the answers on the same F.
+
+    ``profile``: the motion's profile and limits, for the plans and their scores.
 
     ``step``, when given, is called after each case (a progress bar's ``update``).
     """
     out = {m.name: Results.empty(len(cases), arm.planned) for m in methods}
     for k, case in enumerate(cases):
-        obj = Objective(arm, case.goal, case.start, mode=mode)
+        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
         for method in methods:
             clock = time.perf_counter()
-            answer = method.solve(arm, mode, case.goal, case.start, case.seed)
+            answer = method.solve(arm, mode, case.goal, case.start, case.seed, obj.profile)
             seconds = time.perf_counter() - clock
             _score(out[method.name], k, obj, answer, case)
             out[method.name].seconds[k] = seconds if answer.seconds is None else answer.seconds
