@@ -31,8 +31,8 @@ from trajplan_ros.planning.motion_profile import Timing
 from trajplan_ros.planning.rest_to_rest import joint_profiles, JointProfiles
 from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw
 
-__all__ = ['Trajectory', 'motion_points', 'motion_trajectory', 'servo_trajectory',
-           'trajectory_points']
+__all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory',
+           'servo_trajectory', 'trajectory_points']
 
 #: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
 _RESOLUTION = 1e-6
@@ -264,6 +264,29 @@ def motion_points(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Tim
     profiles = _profiles(start, goal, law, timing)
     periods = float(profiles.ends_ns.max(initial=0)) / 1e9 / sample_period
     return int(periods) if periods > 1e6 else len(_profile_times_ns(profiles, sample_period))
+
+
+def motion_states(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing,
+                  t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return the motion's positions, velocities, accelerations and jerks at times t (T,), s.
+
+    Each (T, n_joints), as ``motion_trajectory`` publishes the motion; under the servo law the
+    velocity steps at the start and at each arrival (acceleration and jerk are 0 between).
+    """
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    t = np.asarray(t, dtype=float)
+    if law.kind == SERVO:
+        speed = _servo_speeds(start, goal, law, timing)
+        arrive = np.abs(goal - start) / speed
+        moving = t[:, None] < arrive[None, :]
+        step = np.sign(goal - start) * speed
+        q = np.where(moving, start + step * t[:, None], goal)
+        zero = np.zeros_like(q)
+        return q, np.where(moving, step, 0.0), zero, zero
+    turn, velocity, acceleration, jerk = _profiles(start, goal, law, timing).sample(
+        np.round(t * 1e9).astype(np.int64))
+    return start + turn, velocity, acceleration, jerk
 
 
 def _servo_speeds(start: np.ndarray, goal: np.ndarray, law: TimeLaw,

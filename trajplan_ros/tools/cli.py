@@ -13,6 +13,7 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.planning.motion_profile import MotionProfile
 from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
@@ -139,8 +140,9 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
     if result.joint_goal is not None:
         lines.append('joint goal [rad]: ' + '  '.join(
             f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
-        lines.append(f'motion time {result.motion_time_s:.4f} s '
-                     f'({result.profile.describe()}), position error '
+        motion = result.profile
+        law = '' if motion == MotionProfile() else f' ({motion.describe()})'
+        lines.append(f'motion time {result.motion_time_s:.4f} s{law}, position error '
                      f"{describe_residual(result.position_error_m, 'm')}, efficiency F "
                      f'{result.efficiency:.4f}, '
                      f'{result.iterations} iterations, '

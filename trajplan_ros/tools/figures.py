@@ -12,7 +12,10 @@ no polish, ``bench.methods.METHODS['iepso-paper']``):
 * fig04_error.png, fig07_errors.png: the error per generation (Fig. 4, 7);
 * fig05_joint_angles.png: the joint angles against time of the planned motion (Fig. 5);
 * fig10_reward.png: the error with and without the reward for ``--runs`` seeds (Fig. 10);
-* fig11_arm.png: the arm in 3-D at the start and at the goal, with the tool path (Fig. 11).
+* fig11_arm.png: the arm in 3-D at the start and at the goal, with the tool path (Fig. 11);
+* fig12_profiles.png: not in the paper: position, velocity, acceleration and jerk of each
+  joint against time, the paper's target planned under each motion profile (servo,
+  trapezoidal, jerk-limited; ``PROFILE_LIMITS``) with independent and synchronized timing.
 
 Matplotlib is an optional extra (``figures``), imported when the command runs; figures are drawn
 with ``matplotlib.figure.Figure`` and its Agg canvas, so no display is needed.
@@ -28,8 +31,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.planning import planner
+from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
 from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import PlanResult
+from trajplan_ros.planning.trajectory import motion_states
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import METHODS
 from trajplan_ros.tools.bench.runner import run
@@ -46,8 +52,11 @@ FIGURES: dict[str, tuple[float, float]] = {
     'fig03_efficiency.png': (6.4, 4.4), 'fig04_error.png': (6.4, 4.4),
     'fig05_joint_angles.png': (8.0, 5.6), 'fig07_errors.png': (6.4, 4.8),
     'fig09_efficiency.png': (6.4, 4.8), 'fig10_reward.png': (9.6, 4.4),
-    'fig11_arm.png': (6.4, 6.4),
+    'fig11_arm.png': (6.4, 6.4), 'fig12_profiles.png': (16.0, 9.0),
 }
+#: The limits of fig12_profiles.png: every joint at most 0.2 rad/s (the paper's omega),
+#: 0.2 rad/s^2 and 1 rad/s^3.
+PROFILE_LIMITS = {'max_acceleration': 0.2, 'max_jerk': 1.0}
 DEFAULT_SEED = 1
 DEFAULT_RUNS = 5
 _ERROR_FLOOR = 1e-17       # m: an error of 0 is drawn here on the log axis
@@ -173,6 +182,33 @@ def _plot_arm(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> None:
     ax.set_title('Fig. 11: the arm at the start and at the goal, with the tool path')
 
 
+def _plot_profiles(fig: Figure, arm: ArmModel, goal: np.ndarray, seed: int) -> None:
+    quantities = (('position', 'rad'), ('velocity', 'rad/s'), ('acceleration', 'rad/s²'),
+                  ('jerk', 'rad/s³'))
+    columns = [(p, t) for p in Profile for t in Timing]
+    axes = fig.subplots(len(quantities), len(columns), sharex='col', sharey='row')
+    for c, (profile, timing) in enumerate(columns):
+        motion = MotionProfile(profile, timing, **PROFILE_LIMITS)
+        result = planner.plan(goal, arm=arm, seed=seed, profile=motion)
+        law = motion.time_law(arm, result.omega)
+        t = np.linspace(0.0, result.motion_time_s * 1.02, 600)
+        states = motion_states(result.start, result.joint_goal, law, motion.timing, t)
+        for row, values in enumerate(states):
+            for j in range(arm.planned):
+                axes[row, c].plot(t, values[:, j], lw=1.2, color=f'C{j}',
+                                  label=arm.joint_names[j])
+            axes[row, c].grid(True, alpha=0.3)
+        axes[0, c].set_title(f'{profile.value}, {timing.value}\n'
+                             f'R = {result.motion_time_s:.2f} s', fontsize='medium')
+        axes[-1, c].set_xlabel('time (s)')
+    for row, (name, unit) in enumerate(quantities):
+        axes[row, 0].set_ylabel(f'{name} ({unit})')
+    axes[0, 0].legend(fontsize='small')
+    fig.suptitle("The paper's target planned under each motion profile: every joint at most "
+                 f"0.2 rad/s, {PROFILE_LIMITS['max_acceleration']:g} rad/s², "
+                 f"{PROFILE_LIMITS['max_jerk']:g} rad/s³ (servo: velocity steps)")
+
+
 def make_figures(outdir: Path, *, seed: int = DEFAULT_SEED, runs: int = DEFAULT_RUNS,
                  dpi: int = 100) -> list[Path]:
     """Plan the paper's experiment and write ``FIGURES`` into ``outdir``; returns the paths."""
@@ -203,6 +239,7 @@ def make_figures(outdir: Path, *, seed: int = DEFAULT_SEED, runs: int = DEFAULT_
         'fig09_efficiency.png': lambda f: _plot_excess(f, plans, f_star, title[9]),
         'fig10_reward.png': lambda f: _plot_reward(f, reward_runs, eps),
         'fig11_arm.png': lambda f: _plot_arm(f, pair, arm),
+        'fig12_profiles.png': lambda f: _plot_profiles(f, arm, case.goal, seed),
     }
     outdir.mkdir(parents=True, exist_ok=True)
     written = []
