@@ -62,6 +62,12 @@ def test_plan_past_max_planning_time_is_timed_out(monkeypatch, capsys):
      'a start needs 5 joint angles (or the 4 planned ones), got 1'),
     (['plan', '--goals', '/nonexistent/goals.csv'], 'cannot read'),
     (['plan', *TARGET, '--max-planning-time', '0'], 'max_planning_time'),
+    (['plan', *TARGET, '--profile', 'trapezoidal'],
+     'the trapezoidal profile needs an acceleration limit for joint joint1'),
+    (['plan', *TARGET, '--profile', 'jerk_limited', '--max-acceleration', '1'],
+     'needs a jerk limit for joint joint1'),
+    (['plan', *TARGET, '--max-jerk', '-1'], 'max_jerk must be finite and positive, got -1.0'),
+    (['plan', *TARGET, '--joint-limits', '/nonexistent/limits.yaml'], 'cannot read joint limits'),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, reason, capsys):
     assert main(argv) == 2
@@ -188,3 +194,24 @@ def test_trajectory_is_the_message_as_published(capsys):
     assert record['success'] and record['trajectory'] is None
     assert re.search(r'; no trajectory: it would need \d{7} points, more than '
                      r'--max-trajectory-points 10000$', record['message'])
+
+
+def test_a_profile_plans_its_duration_and_publishes_its_derivatives(tmp_path, capsys):
+    limits = tmp_path / 'joint_limits.yaml'
+    limits.write_text('joint_limits:\n  joint1: {has_acceleration_limits: true, '
+                      'max_acceleration: 0.05}\n', encoding='utf-8')
+    common = ['plan', *TARGET, '--json', '--trajectory', '--max-acceleration', '0.5']
+    assert main([*common, '--profile', 'trapezoidal', '--joint-limits', str(limits)]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert (record['profile'], record['timing']) == ('trapezoidal', 'independent')
+    points = record['trajectory']['points']
+    assert all(len(p['velocities']) == 5 and p['accelerations'] == [] for p in points)
+    assert points[-1]['velocities'] == [0.0] * 5
+    assert points[-1]['time_from_start'] >= record['motion_time_s']
+    assert main([*common, '--profile', 'jerk_limited', '--max-jerk', '2',
+                 '--timing', 'synchronized']) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record['timing'] == 'synchronized'
+    assert all(len(p['accelerations']) == 5 for p in record['trajectory']['points'])
+    assert main(['plan', *TARGET, '--profile', 'trapezoidal', '--max-acceleration', '0.5']) == 0
+    assert 's (trapezoidal, independent), position error' in capsys.readouterr().out

@@ -11,7 +11,7 @@ import pytest
 from trajplan_ros import ArmModel, paper_arm, plan
 from trajplan_ros.planning.motion_profile import (JointLimits, MotionProfile, Profile,
                                                   read_joint_limits, Timing)
-from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TRAPEZOIDAL
+from trajplan_ros.planning.time_law import JERK_LIMITED, joint_time, SERVO, TRAPEZOIDAL
 
 #: MoveIt's format, as a moveit_config package has it (nested variant below).
 LIMITS = """
@@ -140,3 +140,16 @@ def test_settings_take_their_enums_and_say_what_they_are() -> None:
     assert profile.profile is Profile.TRAPEZOIDAL and profile.timing is Timing.SYNCHRONIZED
     assert profile.max_acceleration == 2.0 and profile.describe() == 'trapezoidal, synchronized'
     assert MotionProfile().describe() == 'servo, independent'
+
+
+def test_the_installed_example_limits_are_read_and_planned_with() -> None:
+    example = Path(__file__).resolve().parents[1] / 'config' / 'paper_arm_joint_limits.yaml'
+    limits = read_joint_limits(example)
+    assert sorted(limits) == list(paper_arm().joint_names)
+    for name in ('trapezoidal', 'jerk_limited'):
+        profile = MotionProfile.from_file(example, profile=name, timing='synchronized')
+        result = plan([0.151171, 0.19162, 0.172124], profile=profile, seed=1)
+        assert result.success, result.message
+        law = profile.time_law(paper_arm(), 0.2)
+        slowest = max(joint_time(law, i, abs(result.joint_goal[i])) for i in range(4))
+        assert result.motion_time_s == pytest.approx(slowest, rel=1e-12)

@@ -16,13 +16,14 @@ The names below are the public library API.
 """
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE,
-                                   InvalidRequest, Mode, Objective, plan, PlanResult, PlanStatus,
+                                   InvalidRequest, JointLimits, Mode, MotionProfile, Objective,
+                                   plan, PlanResult, PlanStatus, read_joint_limits,
                                    RewardPunishment, servo_trajectory, Trajectory,
                                    trajectory_points)
 
 __all__ = [
     'ALGORITHMS', 'ArmModel', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'InvalidArmModel',
-    'InvalidRequest', 'Mode', 'Objective', 'PlanResult', 'PlanStatus', 'RewardPunishment',
-    'Trajectory', 'paper_arm',
-    'plan', 'servo_trajectory', 'trajectory_points',
+    'InvalidRequest', 'JointLimits', 'Mode', 'MotionProfile', 'Objective', 'PlanResult',
+    'PlanStatus', 'RewardPunishment', 'Trajectory', 'paper_arm', 'plan', 'read_joint_limits',
+    'servo_trajectory', 'trajectory_points',
 ]

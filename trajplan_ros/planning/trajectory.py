@@ -1,7 +1,9 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Joint trajectory of the paper's servo model: every joint turns at one fixed angular velocity.
+The joint trajectory a controller gets: the paper's servo motion, or a profile's.
+
+Under the servo law (``servo_trajectory``) every joint turns at one fixed angular velocity.
 
 Joint i leaves q_start_i at t = 0 towards q_goal_i at +-omega and stops when it arrives, at
 t_i = |q_goal_i - q_start_i| / omega (omega may be one per joint: a joint whose velocity limit is
@@ -19,6 +21,10 @@ positions themselves: a few ulp over the segment, whose duration is at least a m
 (relative to omega about 1e-9 at 0.2 rad/s in the worst case, 1e-13 on typical plans). After
 the last point the controller holds it, at rest. ``trajectory_points`` counts the points
 without building them, to refuse a long trajectory first.
+
+Under a trapezoidal or jerk-limited profile (``motion_trajectory``; ``motion_profile``) points
+carry velocities, and accelerations for the jerk-limited one, at every phase boundary, so that
+the controller's cubics or quintics are the profile itself (see ``motion_trajectory``).
 """
 from __future__ import annotations
 
@@ -65,7 +71,11 @@ class Trajectory:
         return np.round(self.times * 1e9).astype(np.int64).tolist()
 
     def sample(self, t: np.ndarray) -> np.ndarray:
-        """Return positions at times t (clamped to [0, duration]), linear between points."""
+        """
+        Return positions at times t (clamped to [0, duration]), linear between points.
+
+        That is the servo motion exactly; a profile's motion is ``motion_states``'s.
+        """
         t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
         times = np.concatenate(([0.0], self.times))
         pos = np.vstack((self.start, self.positions))

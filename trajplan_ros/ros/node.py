@@ -177,7 +177,8 @@ class PlannerNode(Node):
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
         self.get_logger().info(f'ready: {jobs.describe_arm(self._settings)}, '
-                               f'{self._settings.algorithm}, {self._settings.omega} rad/s')
+                               f'{self._settings.algorithm}, {self._settings.omega} rad/s, '
+                               f'{self._settings.profile.describe()} profile')
 
     # --- parameters -------------------------------------------------------------------------
 
