@@ -148,14 +148,13 @@ def _rise_and_cruise(d: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray,
 def _whole_phases(tj: np.ndarray, rise: np.ndarray, cruise: np.ndarray,
                   end_ns: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
-    Return the jerk, constant-acceleration and cruise phases in whole ns (or 0 when shorter).
+    Return the jerk, constant-acceleration and cruise phases in whole nanoseconds.
 
-    None is shorter than ``SHORTEST_NS`` but zero.
-
-    Each is rounded up; a shorter constant-acceleration phase goes into the jerk phases and a
-    shorter cruise into the rise (both make the ramps longer and lower the peaks). With
-    ``end_ns``, the cruise fills the profile to that end (at least ``SLACK_NS`` later than
-    the fastest, so that cruise is long enough).
+    None is shorter than ``SHORTEST_NS`` but zero. Each is rounded up; a shorter
+    constant-acceleration phase goes into the jerk phases and a shorter cruise into the rise
+    (both make the ramps longer and lower the peaks). With ``end_ns``, the cruise fills the
+    profile to that end (at least ``SLACK_NS`` later than the fastest, so that cruise is long
+    enough).
     """
     jerk_ns, rise_ns = _whole_ns(tj), _whole_ns(rise)
     short = (rise_ns < SHORTEST_NS) & (jerk_ns > 0.0)
