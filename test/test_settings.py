@@ -132,7 +132,12 @@ def test_the_motion_comes_from_its_parameters_and_the_limits_file(tmp_path: Path
     law = profile.time_law(paper_arm(), 0.2)
     np.testing.assert_array_equal(law.acceleration, [3.0, 1.0, 3.0, 3.0, 3.0])
     assert Settings.from_parameters(default_values()).profile.describe() == 'servo, independent'
-    limits.write_text('joint_limits:\n  shoulder:\n    has_jerk_limits: true\n    max_jerk: 1\n',
-                      encoding='utf-8')
+    # the file is read when the parameter is set: a later change of the file, or its removal,
+    # does not refuse an unrelated parameter change
+    limits.unlink()
+    assert Settings.from_parameters({**values, 'seed': 5}).profile == profile
+    other = tmp_path / 'other_limits.yaml'
+    other.write_text('joint_limits:\n  shoulder:\n    has_jerk_limits: true\n    max_jerk: 1\n',
+                     encoding='utf-8')
     with pytest.raises(ValueError, match='the arm does not have: shoulder'):
-        Settings.from_parameters(values)
+        Settings.from_parameters({**values, 'joint_limits_file': str(other)})

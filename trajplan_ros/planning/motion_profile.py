@@ -61,6 +61,15 @@ _QUANTITIES = ('velocity', 'acceleration', 'jerk')
 _ARTICLE = {'acceleration': 'an', 'jerk': 'a'}
 
 
+def _positive(value: Any, what: str) -> float:
+    """Return ``value`` as a float, or raise ValueError unless it is a finite positive number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f'{what} must be a number, got {value!r}')
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f'{what} must be finite and positive, got {value!r}')
+    return float(value)
+
+
 @dataclass(frozen=True)
 class JointLimits:
     """One joint's limits from a joint_limits.yaml (rad/s, rad/s^2, rad/s^3; None: not set)."""
@@ -69,14 +78,12 @@ class JointLimits:
     acceleration: float | None = None
     jerk: float | None = None
 
-
-def _positive(value: Any, what: str) -> float:
-    """Return ``value`` as a float, or raise ValueError unless it is a finite positive number."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f'{what} must be a number, got {value!r}')
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f'{what} must be finite and positive, got {value!r}')
-    return float(value)
+    def __post_init__(self) -> None:
+        """Refuse a limit that is not a finite positive number (ValueError with the reason)."""
+        for name in _QUANTITIES:
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, _positive(value, f'{name} limit'))
 
 
 def _joint_entry(name: str, entry: Any) -> JointLimits:

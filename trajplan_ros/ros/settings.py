@@ -27,7 +27,8 @@ from typing import Any, Mapping
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
-from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
+from trajplan_ros.planning.motion_profile import (JointLimits, MotionProfile, Profile,
+                                                  read_joint_limits, Timing)
 from trajplan_ros.planning.objective import DEFAULT_OMEGA
 
 
@@ -210,10 +211,10 @@ class Settings:
                              '(change both at once)') from None
         if not np.all(np.isfinite(start)):
             raise ValueError(f'start_positions has a non-finite angle: {start.tolist()}')
-        profile = MotionProfile.from_file(
-            values['joint_limits_file'] or None, profile=values['profile'],
-            timing=values['timing'], max_acceleration=values['max_acceleration'] or None,
-            max_jerk=values['max_jerk'] or None)
+        limits = _joint_limits(values['joint_limits_file']) if values['joint_limits_file'] else {}
+        profile = MotionProfile(profile=values['profile'], timing=values['timing'],
+                                max_acceleration=values['max_acceleration'] or None,
+                                max_jerk=values['max_jerk'] or None, joint_limits=limits)
         profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
         return cls(profile=profile, arm=arm, omega=values['angular_velocity'], mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
@@ -238,3 +239,14 @@ def _urdf_arm(description: bytes, base_link: str | None, tip_link: str | None,
     """
     return ArmModel.from_urdf(description, base_link, tip_link, tool_offset=tool_offset,
                               tool_axis=tool_axis)
+
+
+@functools.lru_cache(maxsize=4)
+def _joint_limits(path: str) -> dict[str, JointLimits]:
+    """
+    Return a joint_limits.yaml's limits, read once per path (ValueError, not cached, if bad).
+
+    So a parameter change that leaves ``joint_limits_file`` as it is does not read the file
+    again; to read an edited file, set the parameter to another path (or empty) and back.
+    """
+    return read_joint_limits(path)

@@ -28,7 +28,8 @@ import sys
 from typing import Sequence
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.objective import Mode
+from trajplan_ros.planning.motion_profile import MotionProfile
+from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.planning.planner import prepare
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
                                           arm_from_arguments, motion_from_arguments,
@@ -161,7 +162,7 @@ def _cases(args: argparse.Namespace, arm: ArmModel, mode: Mode) -> list[Case]:
 
 def _motion_note(args: argparse.Namespace) -> str:
     """Return what the heading says of the motion profile: nothing for the servo law."""
-    if args.motion.profile.value == 'servo' and args.motion.timing.value == 'independent':
+    if args.motion == MotionProfile():
         return ''
     return f' Motion: {args.motion.describe()} profile.'
 
@@ -241,7 +242,7 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
 def _run(args: argparse.Namespace) -> int:
     arm, mode = arm_from_arguments(args), Mode(args.mode)
     args.motion = motion_from_arguments(args)
-    args.motion.time_law(arm, 0.2)          # a profile without the limits it needs: refused
+    args.motion.time_law(arm, DEFAULT_OMEGA)    # a profile without the limits it needs: refused
     methods, notes = _chosen_methods(args, arm)
     prepare()                      # compile or load the kernels now, not in the first timed plan
     if args.urdf:
