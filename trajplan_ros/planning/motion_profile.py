@@ -185,18 +185,16 @@ class MotionProfile:
         urdf = np.asarray(arm.velocity, dtype=float)
         velocity = np.minimum(float(omega), [v.velocity or u for v, u in zip(own, urdf)])
         settings = {'acceleration': self.max_acceleration, 'jerk': self.max_jerk}
-        limits = {}
-        for quantity in ('acceleration', 'jerk'):
+        limits = {'acceleration': np.full(len(own), np.inf), 'jerk': np.full(len(own), np.inf)}
+        for quantity in _NEEDS[self.profile]:
             values = [getattr(v, quantity) or settings[quantity] for v in own]
-            if quantity not in _NEEDS[self.profile]:
-                values = [None] * len(own)
-            for name, value in zip(arm.joint_names, values):
-                if value is None and quantity in _NEEDS[self.profile]:
-                    raise ValueError(
-                        f'the {self.profile.value} profile needs {_ARTICLE[quantity]} '
-                        f'{quantity} limit for joint {name}: none in the joint limits and no '
-                        f'max_{quantity} given')
-            limits[quantity] = np.array([np.inf if v is None else v for v in values])
+            missing = [name for name, value in zip(arm.joint_names, values) if value is None]
+            if missing:
+                raise ValueError(
+                    f'the {self.profile.value} profile needs {_ARTICLE[quantity]} {quantity} '
+                    f'limit for joint {missing[0]}: none in the joint limits and no '
+                    f'max_{quantity} given')
+            limits[quantity] = np.array(values, dtype=float)
         return TimeLaw(_KIND[self.profile], velocity, limits['acceleration'], limits['jerk'])
 
     def describe(self) -> str:

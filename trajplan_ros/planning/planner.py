@@ -181,7 +181,6 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
     profile = profile if profile is not None else MotionProfile()
-    profile.time_law(arm, omega)                 # a profile without its limits: ValueError
     common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega),
               'profile': profile}
     try:

@@ -34,7 +34,8 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ['GAP_NS', 'JointProfiles', 'SLACK_NS', 'SMALLEST_TURN', 'SNAP_NS', 'joint_profiles']
+__all__ = ['GAP_NS', 'JointProfiles', 'SLACK_NS', 'SMALLEST_TURN', 'SNAP_NS', 'advance',
+           'joint_profiles']
 
 #: Bisection steps for a stretched profile's peak velocity: to the last bit of a double.
 _BISECTION = 200
@@ -57,6 +58,13 @@ GAP_NS = 500_000
 def _whole_ns(seconds: np.ndarray) -> np.ndarray:
     """Return ``seconds`` in nanoseconds rounded up, but for rounding errors below 1e-6 ns."""
     return np.ceil(np.round(seconds * _NS, 6))
+
+
+def advance(tau: np.ndarray, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray,
+            jerk: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return position, velocity and acceleration tau s into a piece of constant jerk."""
+    return (pos + tau * (vel + tau * (acc / 2.0 + tau * jerk / 6.0)),
+            vel + tau * (acc + tau * jerk / 2.0), acc + tau * jerk)
 
 
 def _ramp(vp: np.ndarray, a: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -121,9 +129,7 @@ class JointProfiles:
         tau = (t[:, :, 0] - starts[rows, phase]) / _NS
         jerk, acc = self.jerk[rows, phase], self.acceleration[rows, phase]
         vel, pos = self.velocity[rows, phase], self.position[rows, phase]
-        turn = pos + tau * (vel + tau * (acc / 2.0 + tau * jerk / 6.0))
-        speed = vel + tau * (acc + tau * jerk / 2.0)
-        accel = acc + tau * jerk
+        turn, speed, accel = advance(tau, pos, vel, acc, jerk)
         done = t[:, :, 0] >= self.ends_ns[None, :]
         turn = np.where(done, self.position[:, -1][None, :], turn)
         moving = np.where(done, 0.0, 1.0)
@@ -260,11 +266,12 @@ def _dodge(durations: np.ndarray, fixed: np.ndarray, to_end: np.ndarray, common:
     """
     out = durations.copy()
     taken = np.concatenate(([0], np.cumsum(out[fixed], axis=1).ravel()))
-    placed = list(np.flatnonzero(fixed))
+    placed = [p for p in np.flatnonzero(fixed) if out[p].any()]     # a still joint is no twin
     for i in np.flatnonzero(~fixed):
-        own = np.cumsum(durations[i])
+        unplaced = np.cumsum(durations[i])
         twins = [p for p in placed
-                 if np.all(np.abs(np.cumsum(durations[p]) - own) < GAP_NS) and fits(i, out[p])]
+                 if np.all(np.abs(np.cumsum(durations[p]) - unplaced) < GAP_NS)
+                 and fits(i, out[p])]
         placed.append(i)
         if twins:
             out[i] = out[twins[0]]
@@ -313,11 +320,10 @@ def _amplitudes(durations: np.ndarray, d: np.ndarray
     accel = np.stack((none, ones, ones, none, none, -ratio, -ratio), axis=1)
     vel, pos = np.zeros_like(s), np.zeros((d.size, 8))
     for k in range(7):                            # the state at each phase's start, then the end
-        tau = s[:, k]
-        pos[:, k + 1] = pos[:, k] + tau * (vel[:, k] + tau * (accel[:, k] / 2.0
-                                                              + tau * jerks[:, k] / 6.0))
+        pos[:, k + 1], at_end, _ = advance(s[:, k], pos[:, k], vel[:, k], accel[:, k],
+                                           jerks[:, k])
         if k < 6:
-            vel[:, k + 1] = vel[:, k] + tau * (accel[:, k] + tau * jerks[:, k] / 2.0)
+            vel[:, k + 1] = at_end
     with np.errstate(divide='ignore', invalid='ignore'):
         peak = np.where(d > 0.0, d / pos[:, -1], 0.0)[:, None]
     pos = pos * peak

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.rest_to_rest import joint_profiles, JointProfiles
+from trajplan_ros.planning.rest_to_rest import advance, joint_profiles, JointProfiles
 from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw
 
 __all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory',
@@ -146,10 +146,16 @@ def servo_trajectory(start: np.ndarray, goal: np.ndarray, omega: float | np.ndar
     ns = np.where(np.isin(t, arrive), np.ceil(t * 1e9), np.round(t * 1e9))
     ns[-1] = np.ceil(max(t[-1], duration) * 1e9)
     t = ns / 1e9
-    turned = np.sign(goal - start) * omega * t[:, None]
-    positions = np.where(t[:, None] >= arrive[None, :], goal, start + turned)
+    positions = _servo_positions(start, goal, omega, arrive, t)
     positions[-1] = goal                         # its time is at least R (up to its rounding)
     return Trajectory(tuple(names), start, t, positions)
+
+
+def _servo_positions(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,
+                     arrive: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Return the servo motion's positions (T, n) at times t (T,): at omega till ``arrive``."""
+    turned = np.sign(goal - start) * omega * t[:, None]
+    return np.where(t[:, None] >= arrive[None, :], goal, start + turned)
 
 
 def trajectory_points(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,
@@ -250,10 +256,12 @@ def motion_trajectory(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing:
                                 sample_period=sample_period, joint_names=names)
     profiles = _profiles(start, goal, law, timing)
     t_ns = _profile_times_ns(profiles, sample_period)
-    turn, velocity, acceleration, _ = profiles.sample(t_ns)
-    positions = _short_mantissas(start + turn)
+    # the state at t = 0 and at every point: the phase that starts there, for the next segment
+    turn, velocity, acceleration, jerk = profiles.sample(np.concatenate(([0], t_ns)))
+    positions = _short_mantissas(start + turn[1:])
     positions[-1] = goal
-    _absorb_rounding(profiles, t_ns, start, positions, velocity)
+    _absorb_rounding(t_ns, start, positions, (velocity, acceleration, jerk))
+    velocity, acceleration = velocity[1:], acceleration[1:]
     velocity[-1], acceleration[-1] = 0.0, 0.0
     return Trajectory(tuple(names), start, t_ns / 1e9, positions, velocity,
                       acceleration if law.kind == JERK_LIMITED else None)
@@ -289,11 +297,10 @@ def motion_states(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Tim
     if law.kind == SERVO:
         speed = _servo_speeds(start, goal, law, timing)
         arrive = np.abs(goal - start) / speed
+        q = _servo_positions(start, goal, speed, arrive, t)
         moving = t[:, None] < arrive[None, :]
-        step = np.sign(goal - start) * speed
-        q = np.where(moving, start + step * t[:, None], goal)
         zero = np.zeros_like(q)
-        return q, np.where(moving, step, 0.0), zero, zero
+        return q, np.where(moving, np.sign(goal - start) * speed, 0.0), zero, zero
     turn, velocity, acceleration, jerk = _profiles(start, goal, law, timing).sample(
         np.round(t * 1e9).astype(np.int64))
     return start + turn, velocity, acceleration, jerk
@@ -349,10 +356,13 @@ def _short_mantissas(values: np.ndarray) -> np.ndarray:
     return np.ldexp(np.round(np.ldexp(fraction, _MANTISSA)), exponent - _MANTISSA)
 
 
-def _absorb_rounding(profiles: JointProfiles, t_ns: np.ndarray, start: np.ndarray,
-                     positions: np.ndarray, velocity: np.ndarray) -> None:
+def _absorb_rounding(t_ns: np.ndarray, start: np.ndarray, positions: np.ndarray,
+                     states: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
     """
     Shift the velocities at the points by the rounding of the positions, in place.
+
+    ``states``: the profile's velocity, acceleration and jerk (T + 1, n) at t = 0 and at each
+    point, in the phase that starts there; the points' velocities are ``states[0][1:]``.
 
     Each segment would take e / T at both its ends: e is the difference between the rounded
     positions' step and the profile's over the segment (from its start, in the phase that
@@ -361,13 +371,12 @@ def _absorb_rounding(profiles: JointProfiles, t_ns: np.ndarray, start: np.ndarra
     of either costs jerk in proportion): the shorter one's, nearly. The first segment starts
     at the state at rest, which the controller takes as it is; the last point stays at rest.
     """
-    before = np.concatenate(([0], t_ns[:-1]))
-    span = (t_ns - before) / 1e9                                     # (T,) s
-    _, vel, acc, jerk = profiles.sample(before)
-    step = span[:, None] * (vel + span[:, None] * (acc / 2.0 + span[:, None] * jerk / 6.0))
+    velocity, acceleration, jerk = states
+    span = np.diff(np.concatenate(([0], t_ns))) / 1e9                 # (T,) s
+    step, _, _ = advance(span[:, None], 0.0, velocity[:-1], acceleration[:-1], jerk[:-1])
     previous = np.vstack((start, positions[:-1]))
     shift = ((positions - previous) - step) / span[:, None]         # (T, n) per segment
     weight = (1.0 / span ** 2)[:, None]
-    # point k ends segment k and starts segment k + 1
-    velocity[:-1] += ((weight[:-1] * shift[:-1] + weight[1:] * shift[1:])
-                      / (weight[:-1] + weight[1:]))
+    # point k ends segment k and starts segment k + 1 (velocity[k + 1] is point k's)
+    velocity[1:-1] += ((weight[:-1] * shift[:-1] + weight[1:] * shift[1:])
+                       / (weight[:-1] + weight[1:]))
