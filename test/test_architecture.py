@@ -3,9 +3,10 @@
 """
 The package's architecture, checked on its source: layers, imports, function size, headers.
 
-The folders are layers: ``kinematics`` < ``planning`` < ``ros`` and ``tools``. A module may
+The folders are layers: ``kinematics`` < ``collision`` < ``planning`` < ``ros`` and ``tools``.
+A module may
 import from its own layer and the layers below it, never above, and the import graph between
-our modules has no cycles. Neither ``kinematics`` nor ``planning`` may import ROS.
+our modules has no cycles. None of ``kinematics``, ``collision`` and ``planning`` may import ROS.
 """
 import ast
 from pathlib import Path
@@ -18,9 +19,10 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
 #: What each layer may import from this package (besides itself).
 ALLOWED = {
     'kinematics': set(),
-    'planning': {'kinematics'},
-    'ros': {'kinematics', 'planning'},
-    'tools': {'kinematics', 'planning', 'ros'},   # the node's clients share its conventions
+    'collision': {'kinematics'},
+    'planning': {'kinematics', 'collision'},
+    'ros': {'kinematics', 'collision', 'planning'},
+    'tools': {'kinematics', 'collision', 'planning', 'ros'},   # clients share the node's ways
 }
 #: Top-level names of ROS 2 Python packages: none may appear in the numpy core.
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'geometry_msgs', 'nav_msgs', 'sensor_msgs',
@@ -72,14 +74,15 @@ def test_every_module_is_in_a_layer() -> None:
 @pytest.mark.parametrize('name', sorted(MODULES))
 def test_imports_go_down_the_layers_only(name: str) -> None:
     if layer(name) is None:                    # the package root re-exports the library API
-        assert {layer(m) for m in ours(name, MODULES[name])} <= {'kinematics', 'planning'}
+        core = {'kinematics', 'collision', 'planning'}
+        assert {layer(m) for m in ours(name, MODULES[name])} <= core
         return
     for target in ours(name, MODULES[name]):
         assert layer(target) in ALLOWED[layer(name)] | {layer(name)}, f'{name} -> {target}'
 
 
 @pytest.mark.parametrize('name', [m for m in sorted(MODULES)
-                                  if layer(m) in ('kinematics', 'planning')])
+                                  if layer(m) in ('kinematics', 'collision', 'planning')])
 def test_the_core_imports_no_ros(name: str) -> None:
     roots = {m.split('.')[0] for m in imported(name, MODULES[name])}
     assert not roots & ROS_PACKAGES, f'{name} imports {roots & ROS_PACKAGES}'

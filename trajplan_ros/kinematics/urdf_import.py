@@ -36,7 +36,8 @@ import numpy as np
 from trajplan_ros.kinematics.errors import InvalidArmModel
 import yourdfpy
 
-__all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'joints_between', 'read_chain', 'read_urdf']
+__all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'joints_between', 'read_chain', 'read_urdf',
+           'to_axis']
 
 #: Largest URDF accepted, bytes.
 MAX_BYTES = 10 * 1024 * 1024
@@ -186,7 +187,7 @@ def _refuse_a_jaw(robot: yourdfpy.Robot, last: yourdfpy.Joint) -> None:
             f'{", ".join(map(repr, [last.child, *siblings]))}')
 
 
-def _to_axis(axis: np.ndarray) -> np.ndarray:
+def to_axis(axis: np.ndarray) -> np.ndarray:
     """Return a rotation A with A z = axis (unit): about z x axis, by the angle between them."""
     cross = np.array([-axis[1], axis[0], 0.0])
     s, c = np.linalg.norm(cross), axis[2]
@@ -214,7 +215,7 @@ def _joint_values(joint: yourdfpy.Joint) -> tuple[np.ndarray, float, float, floa
     if not velocity >= 1e-6:
         raise InvalidArmModel(f'joint {joint.name!r} has velocity limit {velocity} rad/s: too '
                               'slow to plan with')
-    return _to_axis(axis / size), lower, upper, velocity
+    return to_axis(axis / size), lower, upper, velocity
 
 
 @dataclass(frozen=True)

@@ -25,9 +25,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
 from trajplan_ros.planning.baselines import de, ga, pso, spso
+from trajplan_ros.planning.free_motion import free_joint_goal
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.motion_profile import MotionProfile
@@ -86,6 +88,8 @@ class PlanResult:
     mode: str = Mode.FREE.value
     omega: float = DEFAULT_OMEGA
     profile: MotionProfile = field(default_factory=MotionProfile)
+    clearance_m: float = float('nan')             # least clearance of the motion (collisions)
+    clearance_pair: str = ''                      # where it occurs
     history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     history_error: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
 
@@ -130,6 +134,8 @@ class PlanResult:
             'mode': self.mode,
             'profile': self.profile.profile.value,
             'timing': self.profile.timing.value,
+            'clearance_m': num(self.clearance_m),
+            'clearance_pair': self.clearance_pair or None,
             'message': self.message,
         }
 
@@ -142,7 +148,8 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
          max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
          options: dict[str, Any] | None = None, max_planning_time: float | None = None,
          stop: Callable[[], bool] | None = None,
-         profile: MotionProfile | None = None) -> PlanResult:
+         profile: MotionProfile | None = None, world: CollisionWorld | None = None
+         ) -> PlanResult:
     """
     Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
 
@@ -155,29 +162,26 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     :param arm: the arm model; default ``paper_arm()``.
     :param mode: "free" (position only) or "radial" (eq. 12-13: the tool axis along the goal
         ray, pointing outward, too).
-    :param algorithm: "iepso" (the planner) or a comparison algorithm: "pso", "spso", "ga",
-        "de".
+    :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
     :param omega: servo angular velocity (rad/s) of eq. (10); it caps every joint's velocity.
-    :param tolerance: largest position error (m) that counts as reached.
-    :param axis_tolerance: in radial mode, largest angle (rad) between the tool axis and the
-        goal ray that counts as radial.
+    :param tolerance: largest position error (m) that counts as reached; ``axis_tolerance``:
+        in radial mode, the largest angle (rad) of the tool axis to the goal ray.
     :param seed: random seed; the same seed gives the same answer, bit for bit.
-    :param population: swarm (or population) size.
-    :param max_iter: iteration cap.
+    :param population: swarm (or population) size; ``max_iter``: iteration cap.
     :param tol: convergence precision (Table 4), the stopping rule's least improvement of F.
     :param shaping: the rewards-and-punishment settings (Table 4 defaults).
     :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
-    :param max_planning_time: longest search (s, monotonic clock); None: no limit.
-    :param stop: asked after every iteration and polish step; True ends the search (Ctrl-C).
+    :param max_planning_time: longest search (s, monotonic clock); None: no limit. ``stop``:
+        asked after every iteration and polish step; True ends the search (Ctrl-C).
     :param profile: the motion's profile, timing and limits (``MotionProfile``; default the
         paper's servo law); the planner minimises that profile's duration. A profile that
         needs a limit no source gives raises ValueError.
+    :param world: the arm's collision model, scene and padding (``CollisionWorld``): the plan
+        is the fastest direct motion found that keeps the padding (``free_motion``).
     """
-    arm = arm if arm is not None else _default_arm()
-    mode = Mode(mode)
+    arm, mode = arm if arm is not None else _default_arm(), Mode(mode)
     _check_settings(algorithm, (tolerance, axis_tolerance), max_planning_time, stop)
-    clock = time.perf_counter()
-    interrupt = _interrupt(max_planning_time, stop)
+    clock, interrupt = time.perf_counter(), _interrupt(max_planning_time, stop)
     goal_arr = np.asarray(goal, dtype=float).ravel()
     start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
     profile = profile if profile is not None else MotionProfile()
@@ -186,12 +190,56 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     try:
         obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping,
                         profile=profile)
+        _check_world(world, arm, obj.goal)
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
                                   seed=seed, interrupt=interrupt, **(options or {}))
-    return _outcome(obj, found, _Limits(tolerance, axis_tolerance, max_planning_time), clock,
-                    common)
+    result = _outcome(obj, found, _Limits(tolerance, axis_tolerance, max_planning_time), clock,
+                      common)
+    if world is None or not result.success:
+        return result
+    return _collision_free(result, obj, world, seed, tolerance, clock)
+
+
+def _check_world(world: CollisionWorld | None, arm: ArmModel, goal: np.ndarray) -> None:
+    """Refuse a world of another arm (ValueError) and a goal inside an obstacle."""
+    if world is None:
+        return
+    if world.arm.geometry.arm.joint_names != arm.joint_names:
+        raise ValueError(f'the collision model is of joints {world.arm.geometry.arm.joint_names}'
+                         f', the arm has {arm.joint_names}')
+    inside = world.obstacle_at(goal)
+    if inside is not None:
+        raise InvalidRequest(f'goal {goal.tolist()} is inside obstacle {inside!r}')
+
+
+def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
+                    seed: int | np.random.Generator | None, tolerance: float,
+                    clock: float) -> PlanResult:
+    """Return a reached plan moved to the fastest free motion found, or NOT_REACHED."""
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    law = result.profile.time_law(world.arm.geometry.arm, result.omega)
+    x0 = result.joint_goal[:obj.arm.planned]
+    found = free_joint_goal(obj, world, law, result.profile.timing, x0, rng, tolerance)
+    result.clearance_m, result.clearance_pair = found.clearance.clearance, found.clearance.pair
+    clear = found.clearance
+    start_note = (f'; it starts within the padding ({clear.start_within}) and comes no closer'
+                  if clear.start_within else '')
+    if found.x is None:
+        result.status = PlanStatus.NOT_REACHED
+        result.message = f'every direct motion found collides: {clear.pair}{start_note}'
+    else:
+        joint_goal = obj.full(found.x)[0]
+        p, _ = obj.arm.tool(joint_goal[None, :])
+        result.joint_goal = joint_goal
+        result.position_error_m = float(np.linalg.norm(p[0] - obj.goal))
+        result.motion_time_s = float(obj.motion_time(found.x[None])[0])
+        result.message = (f'reached in {result.motion_time_s:.4f} s of motion, error '
+                          f"{describe_residual(result.position_error_m, 'm')}, "
+                          f'{clear.describe()}{start_note}')
+    result.plan_time_s = time.perf_counter() - clock
+    return result
 
 
 @dataclass(frozen=True)
