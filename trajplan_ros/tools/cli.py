@@ -19,9 +19,10 @@ from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanResult, PlanStatus, prepare)
 from trajplan_ros.tools import bench, demo, figures, node_commands
-from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
-                                          arm_from_arguments, finite_number,
-                                          motion_from_arguments, positive_count, UsageError)
+from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
+                                          add_motion_arguments, arm_from_arguments,
+                                          finite_number, motion_from_arguments, positive_count,
+                                          UsageError, world_from_arguments)
 
 
 __all__ = ['main', 'build_parser']
@@ -64,6 +65,7 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                         "message says why (default %(default)s, the node's default)")
     add_arm_arguments(p)
     add_motion_arguments(p)
+    add_collision_arguments(p)
     p.set_defaults(run=_run_plan)
 
 
@@ -197,7 +199,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
                 'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity,
-                'profile': args.motion}
+                'profile': args.motion, 'world': world_from_arguments(args, arm)}
     kernels = prepare()
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
