@@ -54,6 +54,7 @@ class Outcome:
     plan_time_s: float | None = None
     timed_out: bool = False                  # ended at max_planning_time
     motion_time_s: float | None = None       # of a published trajectory
+    clearance: tuple[float, str] | None = None   # least clearance (m) and where (collisions)
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -71,13 +72,15 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                   omega=s.omega, tolerance=job.tolerance or s.tolerance,
                   axis_tolerance=s.axis_tolerance, seed=s.seed,
                   population=s.population, max_iter=s.max_iter,
-                  max_planning_time=s.max_planning_time, stop=stop, profile=s.profile)
+                  max_planning_time=s.max_planning_time, stop=stop, profile=s.profile,
+                  world=s.world)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
+    clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None
     if not result.success:
         return Outcome(False, _refusal(where, result, took), result.status.value,
                        result.message, plan_time_s=timed,
-                       timed_out=result.status is PlanStatus.TIMED_OUT)
+                       timed_out=result.status is PlanStatus.TIMED_OUT, clearance=clearance)
     points = result.trajectory_points(s.arm, s.sample_period)
     if points > s.max_trajectory_points:
         reason = (f'the trajectory would need {points} points, more than '
@@ -90,4 +93,4 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,
-                   plan_time_s=timed, motion_time_s=result.motion_time_s)
+                   plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance)

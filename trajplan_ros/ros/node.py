@@ -77,13 +77,17 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.scene import Scene
 from trajplan_ros.planning import prepare
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros.scene_topics import LiveScene, world_markers
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
+from visualization_msgs.msg import MarkerArray
 
 
 __all__ = ['PlannerNode', 'main']
@@ -141,6 +145,8 @@ class PlannerNode(Node):
         for spec in PARAMETERS:
             self.declare_parameter(spec.name, spec.default, _descriptor(spec))
         self._topic_description = ''                  # the last usable robot_description
+        self._topic_semantic = ''                     # the last robot_description_semantic
+        self._live = LiveScene()                      # obstacles from collision_objects
         self._settings = Settings.from_parameters(self._parameter_values())
         kernels = prepare()                     # before the service is offered: no plan waits
         log = self.get_logger().info if kernels.compiled else self.get_logger().debug
@@ -171,6 +177,12 @@ class PlannerNode(Node):
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
                                  qos_profile_sensor_data)
         self.create_subscription(String, 'robot_description', self._on_description, LATCHED)
+        self._markers = self.create_publisher(MarkerArray, 'collision_markers', LATCHED)
+        self.create_subscription(String, 'robot_description_semantic', self._on_semantic,
+                                 LATCHED)
+        self.create_subscription(MarkerArray, 'collision_objects', self._on_collision_objects,
+                                 KEEP_ALL)
+        self._publish_markers(self._settings)
         self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
                             callback_group=ReentrantCallbackGroup())
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
@@ -191,14 +203,16 @@ class PlannerNode(Node):
         # start_positions is held to the chain when it, or the description, is being set
         strict = bool({p.name for p in params} & {'start_positions', 'robot_description'})
         try:
-            Settings.from_parameters(values, self._topic_description, strict_start=strict)
+            Settings.from_parameters(values, self._topic_description, strict_start=strict,
+                                     topic_semantic=self._topic_semantic)
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             return SetParametersResult(successful=False, reason=_reason(exc))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
         self._use(Settings.from_parameters(self._parameter_values(), self._topic_description,
-                                           strict_start=False))
+                                           strict_start=False,
+                                           topic_semantic=self._topic_semantic))
         shown = ', '.join(f'{p.name}=<{len(p.value)} characters>' if p.name == 'robot_description'
                           else f'{p.name}={p.value}' for p in params)
         self.get_logger().info(f'parameters set for the next plan: {shown}')
@@ -213,7 +227,8 @@ class PlannerNode(Node):
         parameter = values['robot_description']
         try:
             settings = Settings.from_parameters({**values, 'robot_description': ''}, msg.data,
-                                                strict_start=False)
+                                                strict_start=False,
+                                                topic_semantic=self._topic_semantic)
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             self.get_logger().warning(f'robot_description refused: {_reason(exc)}; keeping '
                                       f'{jobs.describe_arm(self._settings)}')
@@ -233,6 +248,9 @@ class PlannerNode(Node):
     def _use(self, settings: Settings) -> None:
         """Plan with ``settings`` from the next job; forget the old arm's states if it changed."""
         before = self._settings
+        settings = self._with_live_scene(settings)
+        if settings.world is not before.world:
+            self._publish_markers(settings)
         if settings.arm.same_as(before.arm):                  # e.g. only the speed changed
             self._settings = dataclasses.replace(settings, arm=before.arm)
             return
@@ -240,6 +258,52 @@ class PlannerNode(Node):
         if settings.arm.joint_names != before.arm.joint_names:
             self._states.forget()
         self.get_logger().info(f'arm for the next plan: {jobs.describe_arm(settings)}')
+
+    def _publish_markers(self, settings: Settings) -> None:
+        """Publish the scene and the arm's spheres on collision_markers; log the check."""
+        self._markers.publish(world_markers(settings.world, settings.base_frame,
+                                            self.get_clock().now().to_msg()))
+        w = settings.world
+        self.get_logger().info(
+            'collision check: off' if w is None else
+            f'collision check: {len(w.arm.self_pairs)} link pairs ({len(w.arm.skip)} skipped, '
+            f'{w.arm.skip_source}), {len(w.scene.obstacles)} obstacles, padding {w.padding} m')
+
+    def _with_live_scene(self, settings: Settings) -> Settings:
+        """Return ``settings`` whose scene has the obstacles received as markers too."""
+        if settings.world is None or not self._live.obstacles:
+            return settings
+        w = settings.world
+        scene = Scene(w.scene.obstacles + tuple(self._live.obstacles.values()))
+        return dataclasses.replace(settings, world=CollisionWorld(w.arm, scene, w.padding))
+
+    def _on_semantic(self, msg: String) -> None:
+        """Skip the pairs of an SRDF from now on (unless the parameter is set), or say why not."""
+        try:
+            settings = Settings.from_parameters(self._parameter_values(),
+                                                self._topic_description, strict_start=False,
+                                                topic_semantic=msg.data)
+        except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
+            self.get_logger().warning(f'robot_description_semantic refused: {_reason(exc)}')
+            return
+        self._topic_semantic = msg.data
+        self._use(settings)
+
+    def _on_collision_objects(self, msg: MarkerArray) -> None:
+        """Change the scene of the next plan by markers, or refuse them all with the reason."""
+        try:
+            obstacles = self._live.apply(msg, self._settings.base_frame)
+            if self._settings.world is not None:
+                Scene(self._settings.world.scene.obstacles + tuple(obstacles.values()))
+        except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
+            self.get_logger().warning(f'collision_objects refused, scene kept: {_reason(exc)}')
+            return
+        self._live.obstacles = obstacles
+        base = Settings.from_parameters(self._parameter_values(), self._topic_description,
+                                        strict_start=False, topic_semantic=self._topic_semantic)
+        self._use(base)
+        self.get_logger().info(f'scene for the next plan: {len(obstacles)} obstacles from '
+                               'collision_objects')
 
     # --- inputs (executor thread) -----------------------------------------------------------
 
@@ -306,7 +370,8 @@ class PlannerNode(Node):
         self._publish_outcome(job, 'refused', reason)
 
     def _publish_outcome(self, job: Job, status: str, reason: str,
-                         motion_time_s: float | None = None) -> None:
+                         motion_time_s: float | None = None,
+                         clearance: tuple[float, str] | None = None) -> None:
         """Tell ``plan_results`` how ``job`` ended: from any thread, the first time only."""
         with self._answer_lock:
             if job.reported:
@@ -315,7 +380,7 @@ class PlannerNode(Node):
         self._results.publish(outcomes.outcome_status(
             f'{self.get_fully_qualified_name()}: {job.label}',
             'service call' if job.is_call else 'goal', job.stamp, job.goal, status, reason,
-            motion_time_s))
+            motion_time_s, clearance))
 
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
@@ -374,7 +439,8 @@ class PlannerNode(Node):
                                                                  self._header(s.base_frame)))
                 self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
             # after the trajectory: a caller told "succeeded" finds it published
-            self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s)
+            self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s,
+                                  outcome.clearance)
         if outcome.succeeded:
             self.get_logger().info(outcome.log)
         else:

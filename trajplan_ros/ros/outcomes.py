@@ -15,7 +15,9 @@ other end); ``name`` the node and the job (``/trajplan: service call #3``); ``va
 ``request`` (``service call`` or ``goal``), ``stamp`` (a call's ``sec.nanosec``, else empty),
 ``x``, ``y``, ``z`` (the goal, m, exact decimal round trip), ``status`` (``succeeded``,
 ``rejected``, ``not_reached``, ``timed_out``, ``cancelled``, ``refused``, ``superseded``,
-``shut_down`` or ``failed``) and ``motion_time_s`` (empty unless planned).
+``shut_down`` or ``failed``), ``motion_time_s`` (empty unless planned), and with the
+collision check on, ``clearance_m`` and ``clearance_pair``: the motion's least clearance (m)
+and where it occurs (empty otherwise).
 """
 from __future__ import annotations
 
@@ -44,7 +46,8 @@ def describe_stamp(stamp: tuple[int, int] | None) -> str:
 
 def outcome_status(name: str, request: str, stamp: tuple[int, int] | None,
                    goal: Sequence[float], status: str, message: str,
-                   motion_time_s: float | None = None) -> DiagnosticStatus:
+                   motion_time_s: float | None = None,
+                   clearance: tuple[float, str] | None = None) -> DiagnosticStatus:
     """Build the DiagnosticStatus of one goal's or call's end (see the module docstring)."""
     if status == 'succeeded':
         level = DiagnosticStatus.OK
@@ -53,7 +56,9 @@ def outcome_status(name: str, request: str, stamp: tuple[int, int] | None,
     values = {'request': request, 'stamp': describe_stamp(stamp),
               **{axis: repr(float(v)) for axis, v in zip('xyz', goal)},
               'status': status,
-              'motion_time_s': '' if motion_time_s is None else repr(float(motion_time_s))}
+              'motion_time_s': '' if motion_time_s is None else repr(float(motion_time_s)),
+              'clearance_m': '' if clearance is None else repr(float(clearance[0])),
+              'clearance_pair': '' if clearance is None else clearance[1]}
     return DiagnosticStatus(level=level, name=name, message=message, hardware_id='',
                             values=[KeyValue(key=k, value=v) for k, v in values.items()])
 

@@ -24,8 +24,13 @@ from dataclasses import dataclass, field
 import functools
 from typing import Any, Mapping
 
+from ament_index_python.packages import get_package_share_directory
 import numpy as np
+from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAULT_PADDING
+from trajplan_ros.collision.scene import Scene
+from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
 from trajplan_ros.planning.motion_profile import (JointLimits, MotionProfile, Profile,
                                                   read_joint_limits, Timing)
@@ -106,6 +111,19 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('max_jerk', 0.0,
                   'jerk limit of every joint joint_limits_file gives none, rad/s^3; 0: none',
                   bounds=(0.0, 1e9)),
+    ParameterSpec('collision_check', False,
+                  'plan motions that keep padding from the scene and between the links (the '
+                  "URDF's <collision> shapes); false: no check"),
+    ParameterSpec('robot_description_semantic', '',
+                  'SRDF of the arm (XML text): its disable_collisions pairs are skipped; empty: '
+                  'the robot_description_semantic topic, else computed as MoveIt Setup '
+                  'Assistant does'),
+    ParameterSpec('scene_file', '',
+                  'YAML file of obstacles in the base frame (boxes, spheres, cylinders); '
+                  'empty: none but those on collision_objects'),
+    ParameterSpec('padding', DEFAULT_PADDING,
+                  'least clearance a motion keeps from obstacles and between links, m',
+                  bounds=(0.0, 1.0)),
     ParameterSpec('mode', Mode.FREE.value,
                   'free: position only; radial: the tool axis along the goal ray too (eq. 12-13)',
                   choices=tuple(m.value for m in Mode)),
@@ -167,14 +185,17 @@ class Settings:
     description: str = ''
     #: start_positions did not fit the described chain and all zeros stand in for it.
     start_ignored: bool = False
+    #: The collision model, the scene_file's obstacles and the padding (None: no check).
+    world: CollisionWorld | None = None
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any], topic_description: str = '',
-                        strict_start: bool = True) -> Settings:
+                        strict_start: bool = True, topic_semantic: str = '') -> Settings:
         """
         Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused.
 
-        ``topic_description`` is the last URDF received on the robot_description topic. With
+        ``topic_description`` is the last URDF received on the robot_description topic,
+        ``topic_semantic`` the last SRDF on robot_description_semantic. With
         ``strict_start`` False, a ``start_positions`` that does not fit a described chain gives
         all zeros instead of a refusal (``start_ignored`` says so).
         """
@@ -216,7 +237,14 @@ class Settings:
                                 max_acceleration=values['max_acceleration'] or None,
                                 max_jerk=values['max_jerk'] or None, joint_limits=limits)
         profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
-        return cls(profile=profile, arm=arm, omega=values['angular_velocity'], mode=values['mode'],
+        world = None
+        if values['collision_check']:
+            urdf = description or urdf_xml(arm, velocity=DEFAULT_OMEGA)
+            model = _collision_model(urdf.encode(), arm.base_link, arm.tip_link,
+                                     values['robot_description_semantic'] or topic_semantic)
+            scene = _scene(values['scene_file']) if values['scene_file'] else Scene()
+            world = CollisionWorld(model, scene, values['padding'])
+        return cls(profile=profile, world=world, arm=arm, omega=values['angular_velocity'], mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
@@ -239,6 +267,25 @@ def _urdf_arm(description: bytes, base_link: str | None, tip_link: str | None,
     """
     return ArmModel.from_urdf(description, base_link, tip_link, tool_offset=tool_offset,
                               tool_axis=tool_axis)
+
+
+@functools.lru_cache(maxsize=2)
+def _collision_model(urdf: bytes, base_link: str, tip_link: str, srdf: str) -> ArmCollision:
+    """
+    Return the collision model of a URDF's chain, built once per URDF, chain and SRDF.
+
+    Meshes come from package:// URIs through the ament index; no SRDF ('') computes the pairs
+    to skip.
+    """
+    return ArmCollision.from_urdf(urdf, ArmModel.from_urdf(urdf, base_link, tip_link),
+                                  meshes=MeshSource(get_package_share_directory),
+                                  srdf=srdf or None)
+
+
+@functools.lru_cache(maxsize=4)
+def _scene(path: str) -> Scene:
+    """Return a scene file's obstacles, read once per path (as ``_joint_limits``)."""
+    return Scene.from_file(path)
 
 
 @functools.lru_cache(maxsize=4)

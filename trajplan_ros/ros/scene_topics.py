@@ -1,0 +1,151 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The scene over topics: obstacles in as RViz markers, the scene and the arm's spheres out.
+
+In, on ``collision_objects`` (visualization_msgs/MarkerArray), as RViz draws them: CUBE (scale
+= the box's size), SPHERE (scale = diameter, refused unless x = y = z), CYLINDER (scale.x =
+scale.y = diameter, scale.z = height). A marker is identified by (ns, id), its obstacle id is
+``ns/id``; ADD (or MODIFY) puts it in, DELETE takes it out, DELETEALL takes out all of its ns,
+or everything with an empty ns, as RViz does. Its frame must be the base frame. One bad marker
+refuses the whole message, with the reason, and the scene stays as it was (``LiveScene``).
+
+Out, on ``collision_markers`` (latched): the scene's obstacles in the base frame, and each
+link's spheres (the conservative model, ``collision.spheres``) in the link's own frame, which
+robot_state_publisher's TF places.
+"""
+from __future__ import annotations
+
+from typing import Iterable
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+import numpy as np
+from std_msgs.msg import ColorRGBA, Header
+from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.errors import InvalidCollisionInput
+from trajplan_ros.collision.scene import Obstacle, pose_matrix, Scene
+from trajplan_ros.collision.shapes import Shape
+from visualization_msgs.msg import Marker, MarkerArray
+
+__all__ = ['LiveScene', 'world_markers']
+
+_OBSTACLE = ColorRGBA(r=0.8, g=0.3, b=0.2, a=0.5)
+_SPHERES = ColorRGBA(r=0.2, g=0.6, b=0.9, a=0.3)
+
+
+class LiveScene:
+    """The obstacles received as markers, by id ``ns/id``."""
+
+    def __init__(self) -> None:
+        self.obstacles: dict[str, Obstacle] = {}
+
+    def apply(self, msg: MarkerArray, base_frame: str) -> dict[str, Obstacle]:
+        """Return the obstacles after ``msg`` (InvalidCollisionInput: none of it applied)."""
+        out = dict(self.obstacles)
+        for marker in msg.markers:
+            ident = f'{marker.ns}/{marker.id}'
+            if marker.action == Marker.DELETEALL:
+                out = {k: v for k, v in out.items()
+                       if marker.ns and not k.startswith(marker.ns + '/')}
+            elif marker.action == Marker.DELETE:
+                out.pop(ident, None)
+            elif marker.action == Marker.ADD:
+                out[ident] = _obstacle(marker, ident, base_frame)
+            else:
+                raise InvalidCollisionInput(f'marker {ident}: action {marker.action} is not '
+                                            'ADD, DELETE or DELETEALL')
+        Scene(tuple(out.values()))                         # the scene's own limits
+        return out
+
+
+def _obstacle(marker: Marker, ident: str, base_frame: str) -> Obstacle:
+    """Return the obstacle of an ADD marker, or refuse it with the reason."""
+    where = f'marker {ident}'
+    if marker.header.frame_id != base_frame:
+        raise InvalidCollisionInput(f"{where}: frame '{marker.header.frame_id}' is not the base "
+                                    f"frame '{base_frame}'")
+    s, p, o = marker.scale, marker.pose.position, marker.pose.orientation
+    quaternion = (o.x, o.y, o.z, o.w) if (o.x, o.y, o.z, o.w) != (0, 0, 0, 0) else (0, 0, 0, 1)
+    pose = pose_matrix((p.x, p.y, p.z), quaternion, where)
+    if marker.type == Marker.CUBE:
+        shape = Shape.primitive('box', (s.x, s.y, s.z), pose, where)
+    elif marker.type == Marker.SPHERE:
+        if not s.x == s.y == s.z:
+            raise InvalidCollisionInput(f'{where}: a sphere needs scale x = y = z (its '
+                                        f'diameter), got ({s.x}, {s.y}, {s.z})')
+        shape = Shape.primitive('sphere', (s.x / 2,), pose, where)
+    elif marker.type == Marker.CYLINDER:
+        if s.x != s.y:
+            raise InvalidCollisionInput(f'{where}: a cylinder needs scale x = y (its diameter), '
+                                        f'got ({s.x}, {s.y})')
+        shape = Shape.primitive('cylinder', (s.z, s.x / 2), pose, where)
+    else:
+        raise InvalidCollisionInput(f'{where}: type {marker.type} is not CUBE, SPHERE or '
+                                    'CYLINDER')
+    return Obstacle(ident, shape)
+
+
+def _quaternion(r: np.ndarray) -> tuple[float, float, float, float]:
+    """Return the unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method)."""
+    trace = float(np.trace(r))
+    i = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
+    if i == 0:
+        w = 0.5 * np.sqrt(1.0 + trace)
+        q = ((r[2, 1] - r[1, 2]) / (4 * w), (r[0, 2] - r[2, 0]) / (4 * w),
+             (r[1, 0] - r[0, 1]) / (4 * w), w)
+    else:
+        a, b, c = (i - 1, i % 3, (i + 1) % 3)
+        v = np.empty(3)
+        v[a] = 0.5 * np.sqrt(1.0 + 2 * r[a, a] - trace)
+        v[b] = (r[b, a] + r[a, b]) / (4 * v[a])
+        v[c] = (r[c, a] + r[a, c]) / (4 * v[a])
+        q = (*v, (r[c, b] - r[b, c]) / (4 * v[a]))
+    return tuple(float(x) for x in q)
+
+
+def _pose(matrix: np.ndarray) -> Pose:
+    """Return a 4x4 transform as a Pose."""
+    x, y, z, w = _quaternion(matrix[:3, :3])
+    t = matrix[:3, 3]
+    return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])),
+                orientation=Quaternion(x=x, y=y, z=z, w=w))
+
+
+def _shape_marker(shape: Shape, header: Header, ns: str, ident: int,
+                  colour: ColorRGBA) -> Marker:
+    """Return the marker RViz draws for a box, sphere or cylinder."""
+    d = shape.dimensions
+    kind, scale = {'box': (Marker.CUBE, d),
+                   'sphere': (Marker.SPHERE, (2 * d[0],) * 3),
+                   'cylinder': (Marker.CYLINDER, (2 * d[-1], 2 * d[-1], d[0]))}[shape.kind]
+    return Marker(header=header, ns=ns, id=ident, type=kind, action=Marker.ADD,
+                  pose=_pose(shape.pose), color=colour,
+                  scale=Vector3(x=float(scale[0]), y=float(scale[1]), z=float(scale[2])))
+
+
+def world_markers(world: CollisionWorld | None, base_frame: str,
+                  stamp: Time) -> MarkerArray:
+    """Return the scene's and the arm's spheres' markers, after one that clears the old ones."""
+    out = [Marker(header=Header(frame_id=base_frame, stamp=stamp), action=Marker.DELETEALL)]
+    if world is None:
+        return MarkerArray(markers=out)
+    base = Header(frame_id=base_frame, stamp=stamp)
+    out += [_shape_marker(o.shape, base, 'scene', i, _OBSTACLE)
+            for i, o in enumerate(world.scene.obstacles)]
+    spheres = world.arm.spheres
+    out += list(_sphere_markers(spheres.centres, spheres.radii, spheres.first,
+                                world.arm.link_names, stamp))
+    return MarkerArray(markers=out)
+
+
+def _sphere_markers(centres: np.ndarray, radii: np.ndarray, first: np.ndarray,
+                    links: tuple[str, ...], stamp: Time) -> Iterable[Marker]:
+    """Yield one SPHERE marker per sphere of the arm, in its link's frame."""
+    for link, name in enumerate(links):
+        header = Header(frame_id=name, stamp=stamp)
+        for i in range(first[link], first[link + 1]):
+            pose = np.eye(4)
+            pose[:3, 3] = centres[i]
+            yield _shape_marker(Shape('sphere', pose, (float(radii[i]),)), header,
+                                'arm_spheres', int(i), _SPHERES)
