@@ -1,8 +1,10 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The arm's collision model (issue 29): its geometry from the URDF, the spheres that hold it, the
-pairs to skip, and where meshes may be read from.
+The arm's collision model (issue 29).
+
+Its geometry from the URDF, the spheres that hold it, the pairs to skip, and where meshes may be
+read from.
 """
 from pathlib import Path
 
@@ -146,7 +148,7 @@ def test_meshes_are_read_only_from_packages_and_beside_the_file(tmp_path: Path) 
 
 
 def test_meshes_over_the_limits_are_refused(tmp_path: Path,
-                                           monkeypatch: pytest.MonkeyPatch) -> None:
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
     trimesh.creation.icosphere(3).export(tmp_path / 'ball.stl')
     from trajplan_ros.collision import shapes
     monkeypatch.setattr(shapes, 'MAX_MESH_BYTES', 1000)

@@ -16,9 +16,8 @@ robot_state_publisher's TF places.
 """
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Iterable, TYPE_CHECKING
 
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 import numpy as np
 from std_msgs.msg import ColorRGBA, Header
@@ -27,6 +26,9 @@ from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Obstacle, pose_matrix, Scene
 from trajplan_ros.collision.shapes import Shape
 from visualization_msgs.msg import Marker, MarkerArray
+
+if TYPE_CHECKING:
+    from builtin_interfaces.msg import Time
 
 __all__ = ['LiveScene', 'world_markers']
 

@@ -237,14 +237,8 @@ class Settings:
                                 max_acceleration=values['max_acceleration'] or None,
                                 max_jerk=values['max_jerk'] or None, joint_limits=limits)
         profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
-        world = None
-        if values['collision_check']:
-            urdf = description or urdf_xml(arm, velocity=DEFAULT_OMEGA)
-            model = _collision_model(urdf.encode(), arm.base_link, arm.tip_link,
-                                     values['robot_description_semantic'] or topic_semantic)
-            scene = _scene(values['scene_file']) if values['scene_file'] else Scene()
-            world = CollisionWorld(model, scene, values['padding'])
-        return cls(profile=profile, world=world, arm=arm, omega=values['angular_velocity'], mode=values['mode'],
+        return cls(profile=profile, world=_world(values, arm, description, topic_semantic), arm=arm, omega=values['angular_velocity'],
+                   mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
@@ -267,6 +261,18 @@ def _urdf_arm(description: bytes, base_link: str | None, tip_link: str | None,
     """
     return ArmModel.from_urdf(description, base_link, tip_link, tool_offset=tool_offset,
                               tool_axis=tool_axis)
+
+
+def _world(values: Mapping[str, Any], arm: ArmModel, description: str,
+           topic_semantic: str) -> CollisionWorld | None:
+    """Return the collision world the parameters ask for (None: collision_check is off)."""
+    if not values['collision_check']:
+        return None
+    urdf = description or urdf_xml(arm, velocity=DEFAULT_OMEGA)
+    model = _collision_model(urdf.encode(), arm.base_link, arm.tip_link,
+                             values['robot_description_semantic'] or topic_semantic)
+    scene = _scene(values['scene_file']) if values['scene_file'] else Scene()
+    return CollisionWorld(model, scene, values['padding'])
 
 
 @functools.lru_cache(maxsize=2)
