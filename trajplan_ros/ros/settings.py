@@ -237,7 +237,8 @@ class Settings:
                                 max_acceleration=values['max_acceleration'] or None,
                                 max_jerk=values['max_jerk'] or None, joint_limits=limits)
         profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
-        return cls(profile=profile, world=_world(values, arm, description, topic_semantic), arm=arm, omega=values['angular_velocity'],
+        return cls(profile=profile, world=_world(values, arm, description, topic_semantic),
+                   arm=arm, omega=values['angular_velocity'],
                    mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
