@@ -194,10 +194,10 @@ class Settings:
         """
         Raise ValueError (InvalidArmModel for the arm) with the reason a value is refused.
 
-        ``topic_description`` is the last URDF received on the robot_description topic,
-        ``topic_semantic`` the last SRDF on robot_description_semantic. With
-        ``strict_start`` False, a ``start_positions`` that does not fit a described chain gives
-        all zeros instead of a refusal (``start_ignored`` says so).
+        ``topic_description``, ``topic_semantic``: the last URDF and SRDF received on the
+        robot_description and robot_description_semantic topics. With ``strict_start`` False,
+        a ``start_positions`` that does not fit a described chain gives all zeros instead of a
+        refusal (``start_ignored`` says so).
         """
         description = values['robot_description'] or topic_description
         if description:
@@ -238,8 +238,7 @@ class Settings:
                                 max_jerk=values['max_jerk'] or None, joint_limits=limits)
         profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
         return cls(profile=profile, world=_world(values, arm, description, topic_semantic),
-                   arm=arm, omega=values['angular_velocity'],
-                   mode=values['mode'],
+                   arm=arm, omega=values['angular_velocity'], mode=values['mode'],
                    algorithm=values['algorithm'], population=values['population'],
                    max_iter=values['max_iterations'],
                    seed=None if values['seed'] < 0 else values['seed'],
