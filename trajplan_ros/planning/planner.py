@@ -26,6 +26,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
 from trajplan_ros.planning.baselines import de, ga, pso, spso
@@ -359,12 +360,17 @@ def prepare() -> Warmup:
 
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
     the paper's arm once in each mode and a made-up six-joint arm once in free mode (a kernel's
-    machine code serves every arm; the six joints reach the polish's SQP step).
+    machine code serves every arm; the six joints reach the polish's SQP step), and computes
+    the collision check's sphere bounds once.
     """
     def plans() -> None:
         for mode in Mode:
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
         arm = _six_joint_arm()
         plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
+        # the collision check's sphere bounds: two spheres of one link and a box
+        pair_lower_bounds(np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]),
+                          np.array([[0, 1], [0, 2]]), np.zeros(1, np.int64), np.ones((1, 3)),
+                          np.eye(4)[None])
 
     return warm_up(plans)
