@@ -33,8 +33,8 @@ import numpy as np
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 import pytest
-from test_dependencies import (is_python_key, KEY_DISTRIBUTIONS, package_keys, RUN_TAGS,
-                               setup_argument)
+from test_dependencies import (is_python_key, KEY_DISTRIBUTIONS, package_keys,
+                               ROS_DISTRIBUTIONS, RUN_TAGS, setup_argument)
 from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
@@ -60,8 +60,9 @@ print(json.dumps({'path': sys.path, 'scipy': importlib.util.find_spec('scipy') i
 def declared_distributions() -> list[str]:
     """Return the ROS wheels (setup.py's ros extra) and the distributions of package.xml's keys."""
     python_keys = sorted(k for k in package_keys(*RUN_TAGS) if is_python_key(k))
-    return list(setup_argument('extras_require')['ros']) + [KEY_DISTRIBUTIONS[k]
-                                                            for k in python_keys]
+    cmeel = [dist for dist, key in ROS_DISTRIBUTIONS.items() if key in package_keys(*RUN_TAGS)]
+    return list(setup_argument('extras_require')['ros']) + cmeel + [KEY_DISTRIBUTIONS[k]
+                                                                    for k in python_keys]
 
 
 def requirement_closure(names: Iterable[str]) -> dict[str, importlib.metadata.Distribution]:
@@ -133,9 +134,13 @@ def test_node_runs_with_only_the_declared_dependencies(
         peer: RosClient) -> None:
     python = fresh_venv / 'bin' / 'python'
     env = fresh_environment(ros_env, colcon_install, fresh_venv)
+    # the ROS wheels keep their ament index in the venv's prefix, cmeel's wheels (coal) in
+    # their own prefix inside site-packages
+    cmeel = next(fresh_venv.glob('lib/python3*/site-packages/cmeel.prefix'))
     for package in (k for k in package_keys(*RUN_TAGS) if not is_python_key(k)):
-        index = fresh_venv / 'share/ament_index/resource_index/packages' / package
-        assert index.is_file(), f'{package}: no ROS wheel of the ros extra provides it'
+        assert any((prefix / 'share/ament_index/resource_index/packages' / package).is_file()
+                   for prefix in (fresh_venv, cmeel)), \
+            f'{package}: no ROS or cmeel wheel of the install provides it'
 
     probe = subprocess.run([str(python), '-c', PROBE], cwd=fresh_venv, env=env, text=True,
                            capture_output=True, timeout=LIVENESS_S)   # cwd: not the checkout

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Iterator
 
 from conftest import LIVENESS_S, NodeProcess
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from nav_msgs.srv import GetPlan
 import numpy as np
@@ -21,7 +22,6 @@ from trajplan_ros.planning.motion_profile import MotionProfile, Timing
 from trajplan_ros.planning.trajectory import motion_states
 from trajplan_ros.ros.outcomes import outcome_values
 from trajplan_ros.tools.ros_client import plan_request, RosClient
-from diagnostic_msgs.msg import DiagnosticStatus
 from visualization_msgs.msg import Marker, MarkerArray
 
 NS = '/collisions'
@@ -61,7 +61,7 @@ def planned(planner: NodeProcess, peer: RosClient) -> dict[str, str]:
 
 
 def test_a_scene_sent_over_dds_changes_the_next_plan(planner: NodeProcess,
-                                                      peer: RosClient) -> None:
+                                                     peer: RosClient) -> None:
     # the node's first plan starts upright (q = 0), as the library's does
     unchecked = plan(TARGET, seed=0)
     mark = planner.mark()

@@ -12,9 +12,9 @@ warning saying how to set ``NUMBA_CACHE_DIR``.
 
 numba's own cache is keyed by the kernel's file alone: it would keep a kernel whose callee in
 another file changed, with the callee's old code and constants compiled in. Ours is keyed by
-the package version and a hash of every source file of the core (``kinematics`` and
-``planning``, ``core_stamp``): any change there recompiles every kernel, so a kernel may call
-kernels and read constants of other core files and can never run stale.
+the package version and a hash of every source file of the core (``kinematics``,
+``collision`` and ``planning``, ``core_stamp``): any change there recompiles every kernel, so
+a kernel may call kernels and read constants of other core files and can never run stale.
 
 ``warm_up`` compiles or loads every kernel once, so that no plan pays for it; it reports how
 long that took and whether anything had to be compiled.
@@ -37,7 +37,8 @@ __all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels'
 
 _LOG = logging.getLogger('trajplan_ros')
 #: The folders whose sources key every kernel's cache: the kernels and all they read.
-CORE = tuple(Path(__file__).resolve().parents[1] / name for name in ('kinematics', 'planning'))
+CORE = tuple(Path(__file__).resolve().parents[1] / name for name in ('kinematics', 'collision',
+                                                                     'planning'))
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []

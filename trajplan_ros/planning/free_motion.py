@@ -36,7 +36,8 @@ from trajplan_ros.planning.polish import Linearisation, polish
 from trajplan_ros.planning.time_law import motion_times, TimeLaw
 from trajplan_ros.planning.trajectory import motion_states
 
-__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'SearchOutcome']
+__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'project',
+           'SearchOutcome']
 
 #: Most any link point moves between two instants of the grid (m).
 GRID_SWEEP = 1e-3
@@ -150,7 +151,7 @@ class SearchOutcome:
     checked: int                  # motions checked
 
 
-def _project(obj: Objective, x: np.ndarray, steps: int = 8) -> np.ndarray:
+def project(obj: Objective, x: np.ndarray, steps: int = 8) -> np.ndarray:
     """Return joint vectors x (K, m) after Newton steps onto the goal's solutions."""
     for _ in range(steps):
         here = Linearisation(obj, x, 1.0, newton_only=True)
@@ -160,7 +161,7 @@ def _project(obj: Objective, x: np.ndarray, steps: int = 8) -> np.ndarray:
 
 def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
     """Return reached joint goals, fastest first: random ones projected, and those polished."""
-    projected = _project(obj, rng.uniform(obj.lower, obj.upper, (SAMPLES, obj.arm.planned)))
+    projected = project(obj, rng.uniform(obj.lower, obj.upper, (SAMPLES, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(*obj.tool(x)) <= tolerance]
     return x[np.argsort(obj.motion_time(x), kind='stable')]
@@ -203,7 +204,7 @@ def _bisect(obj: Objective, check, free: np.ndarray, blocked: np.ndarray,
     best_time = float(obj.motion_time(free[None])[0])
     for _ in range(BISECTIONS):
         middle = 0.5 * (low + high)
-        x = _project(obj, ((1.0 - middle) * free + middle * blocked)[None])
+        x = project(obj, ((1.0 - middle) * free + middle * blocked)[None])
         reached = obj.errors(*obj.tool(x))[0] <= tolerance
         if reached and check(x[0]).free:
             low = middle

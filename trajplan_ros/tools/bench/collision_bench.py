@@ -1,0 +1,244 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The ``trajplan bench-collisions`` subcommand: the targets of issue 29, measured.
+
+For each arm (the SO-101, UR5 and Panda of example-robot-data, and the paper's arm) it draws
+scenes with a fresh seed: a table under the base and 1 to 10 boxes, spheres and cylinders
+around the arm, none within the padding of the arm at its start, and goals (the tool point of
+random joint angles, outside every obstacle). Each goal is planned three ways: without any
+check (the plan of before issue 29), with the arm's own links only, and with the scene. Then:
+
+* never a collision: every plan that succeeds is sampled every millisecond and checked by
+  python-fcl on the real shapes (``clearance.IndependentCheck``), which must find every pair
+  farther apart than the padding;
+* not needlessly refused: a brute-force search, ``--brute`` joint solutions of the goal (random
+  joint vectors projected onto it and polished), each motion checked exactly in order of its
+  motion time, gives the fastest free motion it finds; the planner must plan 99 % of the goals
+  where it finds one, within 1 % of its motion time;
+* speed: the median plan time with the scene against the same arm's without any check, and the
+  check of the arm's own links alone against no check.
+"""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from pathlib import Path
+import sys
+import tempfile
+import time
+
+import numpy as np
+from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAULT_PADDING
+from trajplan_ros.collision.scene import Obstacle, Scene
+from trajplan_ros.collision.shapes import MeshSource, Shape
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.planning.free_motion import check_motion, project
+from trajplan_ros.planning.motion_profile import MotionProfile, Timing
+from trajplan_ros.planning.objective import Objective
+from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
+from trajplan_ros.planning.polish import polish
+from trajplan_ros.planning.trajectory import motion_states
+from trajplan_ros.tools.arguments import positive_count
+from trajplan_ros.tools.bench.clearance import IndependentCheck
+from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
+
+__all__ = ['add_parser', 'BenchArm', 'draw_scene']
+
+#: Where each arm starts (free of itself), and its SRDF below robots_dir() if it has one.
+STARTS = {'so101': ((0.0, 0.0, 0.0, 0.0, 0.0), None),
+          'ur5': ((0.0, -1.57, 1.57, -1.57, -1.57, 0.0), 'ur_description/srdf/ur5.srdf'),
+          'panda': ((0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785),
+                    'panda_description/srdf/panda.srdf'),
+          'paper': ((0.0,) * 5, None)}
+
+
+@dataclass
+class BenchArm:
+    """An arm of the bench: its model, URDF file, collision model and start."""
+
+    name: str
+    arm: ArmModel
+    urdf: Path
+    model: ArmCollision
+    start: np.ndarray
+
+    @classmethod
+    def load(cls, name: str, folder: Path) -> BenchArm:
+        """Return the arm ``name`` (paper: written as a URDF into ``folder``)."""
+        start, srdf = STARTS[name]
+        if name == 'paper':
+            arm = paper_arm()
+            urdf = folder / 'paper_arm.urdf'
+            urdf.write_text(urdf_xml(arm, velocity=0.2))
+        else:
+            spec = PUBLISHED[name]
+            arm, urdf = ArmModel.from_urdf(spec.urdf, spec.base_link, spec.tip_link), spec.urdf
+        share = str(robots_dir().parent)
+        model = ArmCollision.from_urdf(
+            urdf, arm, meshes=MeshSource(lambda package: share),
+            srdf=None if srdf is None else (robots_dir() / srdf).read_text())
+        return cls(name, arm, urdf, model, np.array(start, dtype=float))
+
+
+def _obstacle(rng: np.random.Generator, index: int, reach: float) -> Obstacle:
+    """Return a random box, sphere or cylinder within the arm's reach."""
+    kind = ('box', 'sphere', 'cylinder')[rng.integers(3)]
+    size = reach * rng.uniform(0.05, 0.3)
+    dims = {'box': (size, rng.uniform(0.3, 1.0) * size, rng.uniform(0.1, 1.0) * size),
+            'sphere': (size / 3,), 'cylinder': (size, size / 6)}[kind]
+    position = np.array([*rng.uniform(-reach, reach, 2), rng.uniform(0.0, reach)])
+    axis = rng.normal(size=4)
+    quaternion = axis / np.linalg.norm(axis)
+    pose = np.eye(4)
+    x, y, z, w = quaternion
+    pose[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                    [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                    [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    pose[:3, 3] = position
+    return Obstacle(f'{kind}{index}', Shape.primitive(kind, dims, pose, 'bench'))
+
+
+def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float) -> CollisionWorld:
+    """Return a table under the base and 1 to 10 obstacles clear of the arm at its start."""
+    reach = bench.arm.reach
+    table = np.eye(4)
+    table[2, 3] = -0.02 - 0.001
+    obstacles = [Obstacle('table', Shape.primitive('box', (2 * reach, 2 * reach, 0.04), table,
+                                                   'bench'))]
+    wanted = int(rng.integers(1, 11))
+    poses = bench.model.geometry.link_poses(bench.start[None])[0]
+    while len(obstacles) < wanted + 1:
+        candidate = _obstacle(rng, len(obstacles), reach)
+        world = CollisionWorld(bench.model, Scene((candidate,)), padding)
+        pairs = np.flatnonzero(world.pairs[:, 1] >= len(bench.model.link_names))
+        if not any(world.within(poses, p, 2 * padding) for p in pairs):
+            obstacles.append(candidate)
+    return CollisionWorld(bench.model, Scene(tuple(obstacles)), padding)
+
+
+def _goal(bench: BenchArm, world: CollisionWorld, rng: np.random.Generator) -> np.ndarray:
+    """Return the tool point of random joint angles, outside every obstacle."""
+    lower = np.where(np.isfinite(bench.arm.lower), bench.arm.lower, -np.pi)
+    upper = np.where(np.isfinite(bench.arm.upper), bench.arm.upper, np.pi)
+    while True:
+        goal = bench.arm.tool(rng.uniform(lower, upper)[None])[0][0]
+        if world.obstacle_at(goal) is None and goal[2] > 0.0:
+            return goal
+
+
+def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega: float,
+                 count: int) -> float | None:
+    """Return the fastest free motion time among ``count`` joint solutions, or None."""
+    obj = Objective(bench.arm, goal, bench.start, omega=omega)
+    law = MotionProfile().time_law(bench.arm, omega)
+    rng = np.random.default_rng(12345)
+    projected = project(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)), 12)
+    x = np.vstack((projected, polish(obj, projected)))
+    x = x[obj.errors(*obj.tool(x)) <= 1e-6]
+    for candidate in x[np.argsort(obj.motion_time(x), kind='stable')]:
+        if check_motion(world, bench.start, obj.full(candidate)[0], law,
+                        Timing.INDEPENDENT).free:
+            return float(obj.motion_time(candidate[None])[0])
+    return None
+
+
+@dataclass
+class Row:
+    """One goal's measurements."""
+
+    arm: str
+    obstacles: int
+    status: str
+    motion_time: float
+    brute: float | None
+    time_scene: float
+    time_self: float
+    time_none: float
+    independent: float          # python-fcl's least distance along the plan (nan unless planned)
+    pair: str
+
+
+def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
+    """Return the plan's joint angles every millisecond, the end included."""
+    law = MotionProfile().time_law(bench.arm, omega)
+    t = np.append(np.arange(0.0, result.motion_time_s, 1e-3), result.motion_time_s)
+    return motion_states(result.start, result.joint_goal, law, Timing.INDEPENDENT, t)[0]
+
+
+def _measure(bench: BenchArm, world: CollisionWorld, goal: np.ndarray,
+             args: argparse.Namespace, seed: int) -> Row:
+    """Plan one goal three ways, check the plan independently, and search by brute force."""
+    settings = {'start': bench.start, 'arm': bench.arm, 'seed': seed, 'omega': args.omega}
+    none = plan(goal, **settings)
+    own = plan(goal, world=CollisionWorld(bench.model, Scene(), world.padding), **settings)
+    result = plan(goal, world=world, **settings)
+    least, pair = float('nan'), ''
+    if result.success:
+        least, pair, _ = IndependentCheck(world, bench.urdf).least(
+            _sampled(bench, result, args.omega))
+    brute = _brute_force(bench, world, goal, args.omega, args.brute) if none.success else None
+    return Row(bench.name, len(world.scene.obstacles) - 1, result.status.value,
+               result.motion_time_s, brute, result.plan_time_s, own.plan_time_s,
+               none.plan_time_s, least, pair)
+
+
+def _report(rows: list[Row], padding: float) -> str:
+    """Return the table of the targets per arm."""
+    lines = ['arm      goals  planned  collisions  brute-free  planned of those  within 1 %  '
+             'median ms: none / self / scene  self/none  scene/none']
+    for name in dict.fromkeys(r.arm for r in rows):
+        mine = [r for r in rows if r.arm == name]
+        planned = [r for r in mine if r.status == PlanStatus.SUCCEEDED.value]
+        hits = [r for r in planned if not r.independent > padding]
+        free = [r for r in mine if r.brute is not None]
+        kept = [r for r in free if r.status == PlanStatus.SUCCEEDED.value]
+        close = [r for r in kept if r.motion_time <= 1.01 * r.brute + 1e-9]
+        none, own, scene = (1e3 * np.median([getattr(r, k) for r in mine])
+                            for k in ('time_none', 'time_self', 'time_scene'))
+        lines.append(f'{name:8} {len(mine):5}  {len(planned):7}  {len(hits):10}  {len(free):10}'
+                     f'  {len(kept):16}  {len(close):10}  {none:9.1f} / {own:5.1f} / '
+                     f'{scene:6.1f}  {own / none:9.2f}  {scene / none:10.2f}')
+        lines += [f'    collision: {r.pair} at {r.independent:.4g} m' for r in hits]
+    return '\n'.join(lines)
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``trajplan bench-collisions``."""
+    p = sub.add_parser('bench-collisions', help='measure the collision targets (issue 29)',
+                       description=__doc__.split('\n\n')[0].strip())
+    p.add_argument('--arms', nargs='+', default=['so101', 'ur5', 'panda', 'paper'],
+                   choices=sorted(STARTS))
+    p.add_argument('--scenes', type=positive_count, default=10, help='scenes per arm')
+    p.add_argument('--goals', type=positive_count, default=5, help='goals per scene')
+    p.add_argument('--brute', type=positive_count, default=400,
+                   help='joint solutions of the brute-force search per goal')
+    p.add_argument('--omega', type=float, default=1.0, help='angular velocity, rad/s')
+    p.add_argument('--padding', type=float, default=DEFAULT_PADDING)
+    p.add_argument('--seed', type=int, default=None, help='default: a fresh one, printed')
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the bench and print its table."""
+    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
+    print(f'bench-collisions --seed {seed} --scenes {args.scenes} --goals {args.goals} '
+          f'--brute {args.brute} --omega {args.omega} --padding {args.padding}', flush=True)
+    prepare()
+    rng = np.random.default_rng(seed)
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for name in args.arms:
+            clock = time.perf_counter()
+            bench = BenchArm.load(name, Path(folder))
+            print(f'{name}: collision model in {time.perf_counter() - clock:.1f} s '
+                  f'({bench.model.skip_source})', file=sys.stderr, flush=True)
+            for scene in range(args.scenes):
+                world = draw_scene(bench, rng, args.padding)
+                for _ in range(args.goals):
+                    rows.append(_measure(bench, world, _goal(bench, world, rng), args,
+                                         int(rng.integers(2**31))))
+                print(f'{name}: scene {scene + 1}/{args.scenes}', file=sys.stderr, flush=True)
+    print(_report(rows, args.padding))
+    return 0
