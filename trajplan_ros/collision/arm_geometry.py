@@ -26,10 +26,11 @@ import numpy as np
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel
+from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf, to_axis
 import yourdfpy
 
-__all__ = ['ArmGeometry', 'LinkGeometry']
+__all__ = ['ArmGeometry', 'LinkGeometry', 'poses_at']
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,18 +97,47 @@ class ArmGeometry:
     def link_poses(self, q: np.ndarray) -> np.ndarray:
         """Return every link's pose at joint angles q (N, n_joints), (N, links, 4, 4)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        frames = self.arm.frames(q)[:, :-1]                     # (N, n, 4, 4) before the turn
-        theta = q * self.arm.sign + self.arm.offset
+        return np.stack([poses_at(*self.kernel_arrays, row) for row in q])
+
+    @property
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """Return what ``poses_at`` takes before the joint angles."""
+        arm = self.arm
+        return (arm.base, arm.rotations, arm.translations, arm.sign, arm.offset, self._align,
+                np.array([link.joint for link in self.links], dtype=np.int64),
+                np.stack([link.attachment for link in self.links]))
+
+
+@kernel
+def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
+             sign: np.ndarray, offset: np.ndarray, align: np.ndarray, joint: np.ndarray,
+             attachment: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """
+    Return every link's pose (links, 4, 4) at joint angles q (n,).
+
+    The chain's child frame of joint k is F_k Rz(theta_k) A_k^T with F_0 = B and
+    F_{k+1} = F_k Rz(theta_k) L_k (``ArmModel``); link l's pose is its joint's child frame (or
+    the base frame, joint -1) times its attachment.
+    """
+    n = len(q)
+    child = np.empty((n, 4, 4))
+    frame = base.copy()
+    turned = np.empty((4, 4))
+    link = np.eye(4)
+    for k in range(n):
+        theta = sign[k] * q[k] + offset[k]
         c, s = np.cos(theta), np.sin(theta)
-        turned = frames.copy()
-        turned[..., :3, 0] = frames[..., :3, 0] * c[..., None] + frames[..., :3, 1] * s[..., None]
-        turned[..., :3, 1] = frames[..., :3, 1] * c[..., None] - frames[..., :3, 0] * s[..., None]
-        child = turned @ self._align                             # URDF child frames
-        out = np.empty((q.shape[0], len(self.links), 4, 4))
-        for i, link in enumerate(self.links):
-            parent = child[:, link.joint] if link.joint >= 0 else np.eye(4)
-            out[:, i] = parent @ link.attachment
-        return out
+        turned[:, :] = frame
+        turned[:3, 0] = frame[:3, 0] * c + frame[:3, 1] * s
+        turned[:3, 1] = frame[:3, 1] * c - frame[:3, 0] * s
+        child[k] = turned @ align[k]
+        link[:3, :3] = rotations[k]
+        link[:3, 3] = translations[k]
+        frame = turned @ link
+    out = np.empty((len(joint), 4, 4))
+    for i in range(len(joint)):
+        out[i] = (child[joint[i]] if joint[i] >= 0 else np.eye(4)) @ attachment[i]
+    return out
 
 
 def _links(robot: yourdfpy.Robot, arm: ArmModel, meshes: MeshSource) -> tuple[LinkGeometry, ...]:

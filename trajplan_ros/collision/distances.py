@@ -107,9 +107,11 @@ class ArmCollision:
             parents = {j.child: j.parent for j in robot.joints}
             skip, reasons = computed_skip_pairs(geometry, parents.get, model.contacts, samples)
             source = 'computed: ' + ', '.join(f'{v} {k}' for k, v in reasons.items())
-        names = [link.name for link in geometry.links]
+        names, links = [link.name for link in geometry.links], geometry.links
+        # links on one frame of the chain never move against each other: never checked
         pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))
-                 if tuple(sorted((names[i], names[j]))) not in skip]
+                 if tuple(sorted((names[i], names[j]))) not in skip
+                 and links[i].joint != links[j].joint]
         return cls(geometry, model.spheres, skip, source,
                    np.array(pairs, dtype=np.int64).reshape(-1, 2), solids)
 
@@ -124,8 +126,8 @@ class ArmCollision:
         out = np.zeros((len(q), len(pairs)), dtype=bool)
         for n, poses in enumerate(self.geometry.link_poses(q)):
             near = np.flatnonzero(pair_lower_bounds(
-                self.spheres.world_centres(poses), self.spheres.radii, self.spheres.first,
-                pairs, *nothing) <= 0.0)
+                poses, self.spheres.centres, self.spheres.radii, self.spheres.first, pairs,
+                *nothing) <= 0.0)
             for p in near:
                 i, j = pairs[p]
                 out[n, p] = _within(self._solids[i], poses[i], self._solids[j], poses[j], 0.0)
@@ -181,9 +183,9 @@ class CollisionWorld:
 
     def lower_bounds(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return sphere bounds of the distances of pairs ``which`` at link poses (links, 4, 4)."""
-        return pair_lower_bounds(self.arm.spheres.world_centres(poses), self.arm.spheres.radii,
-                                 self.arm.spheres.first, self.pairs[which], self._kinds,
-                                 self._dims, self._inverse)
+        spheres = self.arm.spheres
+        return pair_lower_bounds(poses, spheres.centres, spheres.radii, spheres.first,
+                                 self.pairs[which], self._kinds, self._dims, self._inverse)
 
     def exact(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return coal's distances of pairs ``which`` at link poses (links, 4, 4)."""
@@ -199,6 +201,8 @@ class CollisionWorld:
 
     def within(self, poses: np.ndarray, pair: int, margin: float) -> bool:
         """Return True when pair ``pair`` is closer than ``margin`` (m) at link poses (exact)."""
+        if margin < 0.0:                  # coal takes no negative margin: compare the distance
+            return bool(self.exact(poses, np.array([pair]))[0] < margin)
         a, b = self.pairs[pair]
         links = len(self.arm.geometry.links)
         if b < links:

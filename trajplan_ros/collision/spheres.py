@@ -62,12 +62,6 @@ class SphereModel:
         return cls(np.vstack([c for c, _ in fitted]), np.concatenate([r for _, r in fitted]),
                    first.astype(np.int64))
 
-    def world_centres(self, poses: np.ndarray) -> np.ndarray:
-        """Return the centres in the base frame for link poses (links, 4, 4), (S, 3)."""
-        owner = np.repeat(np.arange(len(self.first) - 1), np.diff(self.first))
-        rot, shift = poses[owner, :3, :3], poses[owner, :3, 3]
-        return np.einsum('sij,sj->si', rot, self.centres) + shift
-
 
 @inlined_kernel
 def _to_primitive(kind: int, dims: np.ndarray, point: np.ndarray) -> float:
@@ -89,18 +83,26 @@ def _to_primitive(kind: int, dims: np.ndarray, point: np.ndarray) -> float:
 
 
 @kernel
-def pair_lower_bounds(centres: np.ndarray, radii: np.ndarray, first: np.ndarray,
-                      pairs: np.ndarray, kinds: np.ndarray, dims: np.ndarray,
+def pair_lower_bounds(poses: np.ndarray, centres: np.ndarray, radii: np.ndarray,
+                      first: np.ndarray, pairs: np.ndarray, kinds: np.ndarray, dims: np.ndarray,
                       inverse: np.ndarray) -> np.ndarray:
     """
     Return a lower bound of each pair's distance (m; below 0 when the spheres overlap).
 
-    ``centres`` (S, 3) in the base frame; pair (a, b): links a and b when b < links, else
+    ``poses`` (links, 4, 4) place the links; ``centres`` (S, 3) are in their link's frame,
+    link l's being ``first[l]:first[l + 1]``. Pair (a, b): links a and b when b < links, else
     link a and obstacle b - links, a primitive of kind ``kinds``, ``dims`` and inverse pose
     ``inverse`` (4, 4). Link to link: min |c_i - c_j| - r_i - r_j over their spheres; link to
     obstacle: min d(c_i, obstacle) - r_i.
     """
     links = len(first) - 1
+    world = np.empty_like(centres)
+    for link in range(links):
+        for i in range(first[link], first[link + 1]):
+            for r in range(3):
+                world[i, r] = (poses[link, r, 0] * centres[i, 0] + poses[link, r, 1]
+                               * centres[i, 1] + poses[link, r, 2] * centres[i, 2]
+                               + poses[link, r, 3])
     out = np.empty(len(pairs))
     local = np.empty(3)
     for p in range(len(pairs)):
@@ -109,16 +111,15 @@ def pair_lower_bounds(centres: np.ndarray, radii: np.ndarray, first: np.ndarray,
         for i in range(first[a], first[a + 1]):
             if b < links:
                 for j in range(first[b], first[b + 1]):
-                    gap = np.sqrt((centres[i, 0] - centres[j, 0]) ** 2
-                                  + (centres[i, 1] - centres[j, 1]) ** 2
-                                  + (centres[i, 2] - centres[j, 2]) ** 2) - radii[i] - radii[j]
+                    gap = np.sqrt((world[i, 0] - world[j, 0]) ** 2
+                                  + (world[i, 1] - world[j, 1]) ** 2
+                                  + (world[i, 2] - world[j, 2]) ** 2) - radii[i] - radii[j]
                     best = min(best, gap)
             else:
                 o = b - links
                 for r in range(3):
-                    local[r] = (inverse[o, r, 0] * centres[i, 0] + inverse[o, r, 1]
-                                * centres[i, 1] + inverse[o, r, 2] * centres[i, 2]
-                                + inverse[o, r, 3])
+                    local[r] = (inverse[o, r, 0] * world[i, 0] + inverse[o, r, 1] * world[i, 1]
+                                + inverse[o, r, 2] * world[i, 2] + inverse[o, r, 3])
                 best = min(best, _to_primitive(kinds[o], dims[o], local) - radii[i])
         out[p] = best
     return out

@@ -15,7 +15,8 @@ first bounded below by the spheres (``collision.spheres``); a pair whose spheres
 than one grid step is decided exactly by coal, with the padding plus that step as margin.
 
 A pair already within the padding at the start (or in contact) is held to its start clearance
-less ``START_TOLERANCE`` instead: the motion may leave, not come closer.
+less ``START_TOLERANCE`` instead: the motion may leave, not come closer (by more than the
+check's resolution).
 
 The search (``free_joint_goal``) is the direct method's own: the goal has a whole set of joint
 solutions, and among them it takes the fastest whose motion is free. It checks the optimiser's
@@ -29,7 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trajplan_ros.collision.arm_geometry import poses_at
 from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.motion_profile import Timing
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.polish import Linearisation, polish
@@ -43,8 +46,8 @@ __all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'projec
 GRID_SWEEP = 1e-3
 #: Most instants of the grid.
 MAX_GRID = 20_000
-#: How much closer (m) a pair within the padding at the start may come.
-START_TOLERANCE = 1e-4
+#: How much closer (m) a pair within the padding at the start may come: the check's resolution.
+START_TOLERANCE = 2 * GRID_SWEEP
 #: Random joint vectors the search projects onto the goal's solutions.
 SAMPLES = 48
 #: Bisection steps from the best free candidate towards a faster colliding one.
@@ -92,36 +95,66 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
     end = world.arm.geometry.link_poses(goal[None])[0]
     everything = np.arange(len(world.pairs))
     t, q = _grid(world, start, goal, law, timing)
-    link_poses = world.arm.geometry.link_poses
     limit = np.full(len(world.pairs), world.padding)
-    at_start = _clearances(world, link_poses(q[:1])[0], everything)
+    at_start = _clearances(world, world.arm.geometry.link_poses(q[:1])[0], everything)
     close = np.flatnonzero(at_start <= world.padding)
     limit[close] = at_start[close] - START_TOLERANCE
     within = ', '.join(world.describe(p) for p in close)
     blocked = _blocked_at(world, end, limit)
     if blocked is not None:                          # most colliding candidates end in it
         return Clearance(False, world.padding, world.describe(blocked), float(t[-1]), within)
-    moved = np.abs(q - start) @ world.sweep.T                       # b_p(t), (M, P)
+    moved = np.ascontiguousarray(np.abs(q - start) @ world.sweep.T)     # b_p(t), (M, P)
     due = np.zeros(len(world.pairs), dtype=np.int64)
     least, where, when = np.inf, -1, 0
+    arrays = world.arm.geometry.kernel_arrays
     k = 0
     while k < len(t):
         which = np.flatnonzero(due <= k)
-        poses = link_poses(q[k:k + 1])[0]
+        poses = poses_at(*arrays, q[k])
         value = world.lower_bounds(poses, which)
-        near = value - limit[which] <= moved[min(k + 1, len(t) - 1), which] - moved[k, which]
-        if near.any() or exact_clearance:
-            exact = which[near] if not exact_clearance else which[value < least]
-            value[np.isin(which, exact)] = world.exact(poses, exact)
-        for n, p in enumerate(which):
-            if value[n] <= limit[p]:
-                return Clearance(False, float(value[n]), world.describe(p), float(t[k]), within)
-            last = int(np.searchsorted(moved[:, p], moved[k, p] + value[n] - limit[p])) - 1
-            due[p] = max(last, k + 1) if last < len(t) - 1 else len(t)
-            if value[n] < least:
-                least, where, when = value[n], p, k
+        step = moved[min(k + 1, len(t) - 1), which] - moved[k, which]
+        near = value - limit[which] <= step                # the spheres leave less than a step
+        if exact_clearance:                                 # and those that may be the least
+            near |= value < min(least, float(np.min(value)) + world.padding)
+        if near.any():
+            value[near] = world.exact(poses, which[near])
+        bad = np.flatnonzero(value <= limit[which] + step)
+        if bad.size:
+            p = which[bad[0]]
+            return Clearance(False, float(value[bad[0]]), world.describe(p), float(t[k]), within)
+        due[which] = next_checks(moved, which, k, value - limit[which])
+        n = int(np.argmin(value))
+        if value[n] < least:
+            least, where, when = float(value[n]), which[n], k
         k = int(due.min())
-    return Clearance(True, float(least), world.describe(where), float(t[when]), within)
+    return Clearance(True, least, world.describe(where), float(t[when]), within)
+
+
+@kernel
+def next_checks(moved: np.ndarray, which: np.ndarray, k: int, slack: np.ndarray) -> np.ndarray:
+    """
+    Return the next instant to check each pair ``which`` at (len(moved): never again).
+
+    It is the last instant before the pair's bound b_p(t) - b_p(t_k) (``moved``, (M, P))
+    reaches its ``slack`` (clearance less its limit), and at least k + 1.
+    """
+    out = np.empty(len(which), dtype=np.int64)
+    last = len(moved) - 1
+    for n in range(len(which)):
+        p = which[n]
+        reach = moved[k, p] + slack[n]
+        if moved[last, p] < reach:
+            out[n] = len(moved)
+            continue
+        low, high = k, last                  # moved[low] < reach <= moved[high]
+        while high - low > 1:
+            middle = (low + high) // 2
+            if moved[middle, p] < reach:
+                low = middle
+            else:
+                high = middle
+        out[n] = max(low, k + 1)
+    return out
 
 
 def _blocked_at(world: CollisionWorld, poses: np.ndarray, limit: np.ndarray) -> int | None:
@@ -179,9 +212,9 @@ def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing:
     def check(x: np.ndarray, exact: bool = False) -> Clearance:
         return check_motion(world, obj.start, obj.full(x)[0], law, timing, exact)
 
-    first = check(x0)
+    first = check(x0, True)
     if first.free:
-        return SearchOutcome(x0, check(x0, True), 1)
+        return SearchOutcome(x0, first, 1)
     checked, colliding, best = 1, [x0], None
     for x in _candidates(obj, rng, tolerance):
         checked += 1

@@ -26,6 +26,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.arm_geometry import poses_at
 from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
@@ -368,8 +369,11 @@ def prepare() -> Warmup:
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
         arm = _six_joint_arm()
         plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
-        # the collision check's sphere bounds: two spheres of one link and a box
-        pair_lower_bounds(np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]),
+        # the collision check's link poses and sphere bounds: two links of a sphere, a box
+        poses = poses_at(np.eye(4), np.stack([np.eye(3)] * 2), np.ones((2, 3)), np.ones(2),
+                         np.zeros(2), np.stack([np.eye(4)] * 2), np.array([-1, 1]),
+                         np.stack([np.eye(4)] * 2), np.zeros(2))
+        pair_lower_bounds(poses, np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]),
                           np.array([[0, 1], [0, 2]]), np.zeros(1, np.int64), np.ones((1, 3)),
                           np.eye(4)[None])
 
