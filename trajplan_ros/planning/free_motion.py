@@ -40,7 +40,7 @@ from trajplan_ros.planning.time_law import motion_times, TimeLaw
 from trajplan_ros.planning.trajectory import motion_states
 
 __all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'project',
-           'SearchOutcome']
+           'SearchOutcome', 'START_TOLERANCE']
 
 #: Most any link point moves between two instants of the grid (m).
 GRID_SWEEP = 1e-3

@@ -237,6 +237,7 @@ def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
         result.joint_goal = joint_goal
         result.position_error_m = float(np.linalg.norm(p[0] - obj.goal))
         result.motion_time_s = float(obj.motion_time(found.x[None])[0])
+        result.efficiency = float(obj(found.x[None]).efficiency[0])
         result.message = (f'reached in {result.motion_time_s:.4f} s of motion, error '
                           f"{describe_residual(result.position_error_m, 'm')}, "
                           f'{clear.describe()}{start_note}')

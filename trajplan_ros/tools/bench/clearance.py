@@ -72,16 +72,32 @@ class IndependentCheck:
                 best = min(best, fcl.distance(o1, o2, fcl.DistanceRequest(), result))
         return best
 
-    def least(self, q: np.ndarray) -> tuple[float, str, int]:
-        """Return the least distance over joint angles q (N, n), its pair and sample index."""
+    def distances(self, q: np.ndarray) -> np.ndarray:
+        """Return every pair's distance at joint angles q (N, n), (N, pairs)."""
         links = len(self.names)
-        best = (np.inf, '', -1)
+        out = np.empty((len(np.atleast_2d(q)), len(self.world.pairs)))
         for k, row in enumerate(np.atleast_2d(q)):
             poses = self._poses(row)
             for p, (a, b) in enumerate(self.world.pairs):
                 other, pose = ((self.links[b], poses[b]) if b < links
                                else (self.obstacles[b - links], np.eye(4)))
-                d = self._distance(self.links[a], poses[a], other, pose)
-                if d < best[0]:
-                    best = (d, self.world.describe(p), k)
-        return best
+                out[k, p] = self._distance(self.links[a], poses[a], other, pose)
+        return out
+
+    def least(self, q: np.ndarray) -> tuple[float, str, int]:
+        """Return the least distance over joint angles q (N, n), its pair and sample index."""
+        d = self.distances(q)
+        k, p = np.unravel_index(np.argmin(d), d.shape)
+        return float(d[k, p]), self.world.describe(int(p)), int(k)
+
+    def violations(self, q: np.ndarray, tolerance: float) -> list[str]:
+        """
+        Return the pairs that break the padding along q (the first sample is the start).
+
+        A pair within the padding at the start breaks it by coming closer than its start
+        distance less ``tolerance``; any other by coming within the padding.
+        """
+        d = self.distances(q)
+        limit = np.where(d[0] <= self.world.padding, d[0] - tolerance, self.world.padding)
+        return [f'{self.world.describe(p)} at {d[:, p].min():.4g} m'
+                for p in np.flatnonzero(d.min(axis=0) <= limit)]

@@ -34,7 +34,7 @@ from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.free_motion import check_motion, project
+from trajplan_ros.planning.free_motion import check_motion, project, START_TOLERANCE
 from trajplan_ros.planning.motion_profile import MotionProfile, Timing
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
@@ -103,8 +103,11 @@ def _obstacle(rng: np.random.Generator, index: int, reach: float) -> Obstacle:
 def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float) -> CollisionWorld:
     """Return a table under the base and 1 to 10 obstacles clear of the arm at its start."""
     reach = bench.arm.reach
+    base = [link for link in bench.model.geometry.links if link.joint < 0]
+    bottom = min((float(np.min(link.vertices() @ link.attachment[2, :3]
+                            + link.attachment[2, 3])) for link in base), default=0.0)
     table = np.eye(4)
-    table[2, 3] = -0.02 - 0.001
+    table[2, 3] = min(bottom, 0.0) - 0.001 - 0.02            # its top just under the base
     obstacles = [Obstacle('table', Shape.primitive('box', (2 * reach, 2 * reach, 0.04), table,
                                                    'bench'))]
     wanted = int(rng.integers(1, 11))
@@ -156,8 +159,7 @@ class Row:
     time_scene: float
     time_self: float
     time_none: float
-    independent: float          # python-fcl's least distance along the plan (nan unless planned)
-    pair: str
+    broken: list[str]           # python-fcl's pairs that break the padding along the plan
 
 
 def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
@@ -174,24 +176,24 @@ def _measure(bench: BenchArm, world: CollisionWorld, goal: np.ndarray,
     none = plan(goal, **settings)
     own = plan(goal, world=CollisionWorld(bench.model, Scene(), world.padding), **settings)
     result = plan(goal, world=world, **settings)
-    least, pair = float('nan'), ''
+    broken = []
     if result.success:
-        least, pair, _ = IndependentCheck(world, bench.urdf).least(
-            _sampled(bench, result, args.omega))
+        broken = IndependentCheck(world, bench.urdf).violations(
+            _sampled(bench, result, args.omega), START_TOLERANCE)
     brute = _brute_force(bench, world, goal, args.omega, args.brute) if none.success else None
     return Row(bench.name, len(world.scene.obstacles) - 1, result.status.value,
                result.motion_time_s, brute, result.plan_time_s, own.plan_time_s,
-               none.plan_time_s, least, pair)
+               none.plan_time_s, broken)
 
 
-def _report(rows: list[Row], padding: float) -> str:
+def _report(rows: list[Row]) -> str:
     """Return the table of the targets per arm."""
     lines = ['arm      goals  planned  collisions  brute-free  planned of those  within 1 %  '
              'median ms: none / self / scene  self/none  scene/none']
     for name in dict.fromkeys(r.arm for r in rows):
         mine = [r for r in rows if r.arm == name]
         planned = [r for r in mine if r.status == PlanStatus.SUCCEEDED.value]
-        hits = [r for r in planned if not r.independent > padding]
+        hits = [r for r in planned if r.broken]
         free = [r for r in mine if r.brute is not None]
         kept = [r for r in free if r.status == PlanStatus.SUCCEEDED.value]
         close = [r for r in kept if r.motion_time <= 1.01 * r.brute + 1e-9]
@@ -200,7 +202,7 @@ def _report(rows: list[Row], padding: float) -> str:
         lines.append(f'{name:8} {len(mine):5}  {len(planned):7}  {len(hits):10}  {len(free):10}'
                      f'  {len(kept):16}  {len(close):10}  {none:9.1f} / {own:5.1f} / '
                      f'{scene:6.1f}  {own / none:9.2f}  {scene / none:10.2f}')
-        lines += [f'    collision: {r.pair} at {r.independent:.4g} m' for r in hits]
+        lines += [f'    collision: {", ".join(r.broken)}' for r in hits]
     return '\n'.join(lines)
 
 
@@ -240,5 +242,5 @@ def run(args: argparse.Namespace) -> int:
                     rows.append(_measure(bench, world, _goal(bench, world, rng), args,
                                          int(rng.integers(2**31))))
                 print(f'{name}: scene {scene + 1}/{args.scenes}', file=sys.stderr, flush=True)
-    print(_report(rows, args.padding))
+    print(_report(rows))
     return 0
