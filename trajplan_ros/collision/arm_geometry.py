@@ -26,7 +26,7 @@ import numpy as np
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf, to_axis
 import yourdfpy
 
@@ -108,6 +108,17 @@ class ArmGeometry:
                 np.stack([link.attachment for link in self.links]))
 
 
+@inlined_kernel
+def _product(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """Write the rigid transforms' product a b into out (numba's ``@`` would need SciPy)."""
+    for r in range(3):
+        for c in range(4):
+            out[r, c] = a[r, 0] * b[0, c] + a[r, 1] * b[1, c] + a[r, 2] * b[2, c]
+        out[r, 3] += a[r, 3]
+    out[3, :3] = 0.0
+    out[3, 3] = 1.0
+
+
 @kernel
 def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
              sign: np.ndarray, offset: np.ndarray, align: np.ndarray, joint: np.ndarray,
@@ -122,21 +133,21 @@ def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
     n = len(q)
     child = np.empty((n, 4, 4))
     frame = base.copy()
-    turned = np.empty((4, 4))
+    turned = base.copy()
     link = np.eye(4)
     for k in range(n):
         theta = sign[k] * q[k] + offset[k]
         c, s = np.cos(theta), np.sin(theta)
-        turned[:, :] = frame
         turned[:3, 0] = frame[:3, 0] * c + frame[:3, 1] * s
         turned[:3, 1] = frame[:3, 1] * c - frame[:3, 0] * s
-        child[k] = turned @ align[k]
+        turned[:3, 2:] = frame[:3, 2:]
+        _product(turned, align[k], child[k])
         link[:3, :3] = rotations[k]
         link[:3, 3] = translations[k]
-        frame = turned @ link
+        _product(turned, link, frame)
     out = np.empty((len(joint), 4, 4))
     for i in range(len(joint)):
-        out[i] = (child[joint[i]] if joint[i] >= 0 else np.eye(4)) @ attachment[i]
+        _product(child[joint[i]] if joint[i] >= 0 else np.eye(4), attachment[i], out[i])
     return out
 
 

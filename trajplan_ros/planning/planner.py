@@ -25,8 +25,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.arm_geometry import poses_at
+from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup

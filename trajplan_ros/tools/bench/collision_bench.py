@@ -104,8 +104,8 @@ def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float) -> Col
     """Return a table under the base and 1 to 10 obstacles clear of the arm at its start."""
     reach = bench.arm.reach
     base = [link for link in bench.model.geometry.links if link.joint < 0]
-    bottom = min((float(np.min(link.vertices() @ link.attachment[2, :3]
-                            + link.attachment[2, 3])) for link in base), default=0.0)
+    heights = (link.vertices() @ link.attachment[2, :3] + link.attachment[2, 3] for link in base)
+    bottom = min((float(np.min(h)) for h in heights), default=0.0)
     table = np.eye(4)
     table[2, 3] = min(bottom, 0.0) - 0.001 - 0.02            # its top just under the base
     obstacles = [Obstacle('table', Shape.primitive('box', (2 * reach, 2 * reach, 0.04), table,
