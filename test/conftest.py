@@ -46,6 +46,23 @@ LIVENESS_S = TIMEOUT_S
 __all__ = ['LIVENESS_S', 'Install', 'NodeProcess', 'wait_until']
 
 
+#: The test of a cold start, run first so that its compile fills the run's cache (test_kernels).
+_FIRST = 'test_the_first_run_compiles_and_says_so_later_ones_load'
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Run the cold-start test first: the run then compiles the kernels once, not twice."""
+    items.sort(key=lambda item: item.name != _FIRST)
+
+
+@pytest.fixture()
+def empty_kernel_cache(tmp_path: Path) -> Path:
+    """Return a kernel cache without kernels: the run's own while it has none, else a new one."""
+    if _KERNEL_CACHE is not None and not any(p.is_file() for p in Path(_KERNEL_CACHE).rglob('*')):
+        return Path(_KERNEL_CACHE)
+    return tmp_path / 'cache'
+
+
 def pytest_sessionfinish() -> None:
     """Remove the run's cache of compiled kernels."""
     if _KERNEL_CACHE is not None:

@@ -10,6 +10,7 @@ test_chain_bench.py: URDF arms against yourdfpy's FK).
 from __future__ import annotations
 
 import ast
+from functools import cache
 import inspect
 import os
 from pathlib import Path
@@ -31,8 +32,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
 CORE_MODULES = tuple(f'trajplan_ros.{folder.name}' for folder in CORE)
 
 
+@cache
 def kernel_modules() -> dict[Path, ast.Module]:
-    """Return every module of the package that defines a ``@kernel``, parsed."""
+    """Return every module of the package that defines a ``@kernel``, parsed (once)."""
     found = {}
     for path in sorted(PACKAGE.rglob('*.py')):
         tree = ast.parse(path.read_text(encoding='utf-8'))
@@ -134,8 +136,8 @@ def run_plan(env: dict[str, str]) -> subprocess.CompletedProcess:
                           env=env, cwd=Path(__file__).resolve().parents[1])
 
 
-def test_the_first_run_compiles_and_says_so_later_ones_load(tmp_path) -> None:
-    env = {**os.environ, 'NUMBA_CACHE_DIR': str(tmp_path / 'cache')}
+def test_the_first_run_compiles_and_says_so_later_ones_load(empty_kernel_cache: Path) -> None:
+    env = {**os.environ, 'NUMBA_CACHE_DIR': str(empty_kernel_cache)}
     first = run_plan(env)
     assert first.returncode == 0, first.stderr
     assert 'trajplan: compiled ' in first.stderr and 'planning kernels in' in first.stderr

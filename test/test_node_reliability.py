@@ -260,10 +260,11 @@ def test_a_plan_past_max_planning_time_ends_timed_out(start_node, peer) -> None:
 def test_malformed_messages_change_nothing(lone_node, peer) -> None:
     ns = '/malformed_messages_change_nothing'
     odd = [float('nan'), float('inf'), -float('inf'), 1e308, -1e308, 5e-324]
-    for k, value in enumerate(odd):
-        peer.publish(Point, f'{ns}/goal', Point(x=value, y=0.1, z=odd[k - 1]))
-        peer.publish(JointState, f'{ns}/joint_states',
-                     JointState(name=['joint1', 'joint2', 'joint2'], position=[value] * (k % 4)))
+    peer.publish(Point, f'{ns}/goal', *(Point(x=value, y=0.1, z=odd[k - 1])
+                                        for k, value in enumerate(odd)))
+    peer.publish(JointState, f'{ns}/joint_states',
+                 *(JointState(name=['joint1', 'joint2', 'joint2'], position=[value] * (k % 4))
+                   for k, value in enumerate(odd)))
     answer = peer.call(GetPlan, f'{ns}/plan_trajectory', plan_request(tuple(PAPER_TARGET)))
     assert ends_at(answer.plan, tuple(PAPER_TARGET))
     # from q = 0 still (no message was taken), so the paper's exact minimum

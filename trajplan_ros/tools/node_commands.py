@@ -169,7 +169,7 @@ def _run_goal(args: argparse.Namespace) -> int:
         ros.publisher(Point, args.topic, args.timeout)   # matched: the history has come
         while not results.empty():                # earlier goals' outcomes (history): not ours
             results.get_nowait()
-        ros.publish(Point, args.topic, Point(x=x, y=y, z=z), args.timeout)
+        ros.publish(Point, args.topic, Point(x=x, y=y, z=z), timeout=args.timeout)
         print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
         planned, line = _outcome(results, args.timeout, 'the goal', _is_point(goal))
         if not planned:

@@ -169,10 +169,12 @@ class RosClient:
                        f'subscriber on {topic}')
         return pub
 
-    def publish(self, msg_type: Any, topic: str, msg: Any, timeout: float = TIMEOUT_S) -> None:
-        """Publish ``msg`` once a subscriber has matched, and wait until every one has it."""
+    def publish(self, msg_type: Any, topic: str, *msgs: Any,
+                timeout: float = TIMEOUT_S) -> None:
+        """Publish ``msgs`` (at most 10) once a subscriber has matched; wait until all have them."""
         pub = self.publisher(msg_type, topic, timeout)
-        pub.publish(msg)
+        for msg in msgs:
+            pub.publish(msg)
         if not pub.wait_for_all_acked(Duration(seconds=timeout)):
             raise TimeoutError(f'the subscribers on {topic} did not acknowledge within '
                                f'{timeout:g} s')
