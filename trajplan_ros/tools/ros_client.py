@@ -171,7 +171,7 @@ class RosClient:
 
     def publish(self, msg_type: Any, topic: str, *msgs: Any,
                 timeout: float = TIMEOUT_S) -> None:
-        """Publish ``msgs`` (at most 10) once a subscriber has matched; wait until all have them."""
+        """Publish ``msgs`` (up to 10) once a subscriber has matched; wait until all have them."""
         pub = self.publisher(msg_type, topic, timeout)
         for msg in msgs:
             pub.publish(msg)
