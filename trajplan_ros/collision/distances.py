@@ -181,11 +181,18 @@ class CollisionWorld:
         out[:geometry.links[near].joint + 1] = 0.0
         return out
 
+    @property
+    def bound_arrays(self) -> tuple[np.ndarray, ...]:
+        """Return what ``pair_lower_bounds`` takes besides poses and pairs, in its order."""
+        spheres = self.arm.spheres
+        return (spheres.centres, spheres.radii, spheres.first, self._kinds, self._dims,
+                self._inverse)
+
     def lower_bounds(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return sphere bounds of the distances of pairs ``which`` at link poses (links, 4, 4)."""
-        spheres = self.arm.spheres
-        return pair_lower_bounds(poses, spheres.centres, spheres.radii, spheres.first,
-                                 self.pairs[which], self._kinds, self._dims, self._inverse)
+        centres, radii, first, kinds, dims, inverse = self.bound_arrays
+        return pair_lower_bounds(poses, centres, radii, first, self.pairs[which], kinds, dims,
+                                 inverse)
 
     def exact(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return coal's distances of pairs ``which`` at link poses (links, 4, 4)."""

@@ -32,6 +32,7 @@ import numpy as np
 
 from trajplan_ros.collision.arm_geometry import poses_at
 from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.planning.motion_profile import Timing
 from trajplan_ros.planning.objective import Objective
@@ -105,29 +106,66 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
         return Clearance(False, world.padding, world.describe(blocked), float(t[-1]), within)
     moved = np.ascontiguousarray(np.abs(q - start) @ world.sweep.T)     # b_p(t), (M, P)
     due = np.zeros(len(world.pairs), dtype=np.int64)
-    least, where, when = np.inf, -1, 0
-    arrays = world.arm.geometry.kernel_arrays
+    least = np.array([np.inf, -1.0, 0.0])                  # clearance, pair, instant
+    margin = world.padding if exact_clearance else -np.inf
     k = 0
     while k < len(t):
-        which = np.flatnonzero(due <= k)
-        poses = poses_at(*arrays, q[k])
-        value = world.lower_bounds(poses, which)
+        k, which, value, near, poses = sphere_pass(
+            world.arm.geometry.kernel_arrays, world.bound_arrays, world.pairs, q, moved, limit,
+            due, k, margin, least)
+        if k == len(t):
+            break
+        value[near] = world.exact(poses, which[near])
         step = moved[min(k + 1, len(t) - 1), which] - moved[k, which]
-        near = value - limit[which] <= step                # the spheres leave less than a step
-        if exact_clearance:                                 # and those that may be the least
-            near |= value < min(least, float(np.min(value)) + world.padding)
-        if near.any():
-            value[near] = world.exact(poses, which[near])
         bad = np.flatnonzero(value <= limit[which] + step)
         if bad.size:
             p = which[bad[0]]
             return Clearance(False, float(value[bad[0]]), world.describe(p), float(t[k]), within)
-        due[which] = next_checks(moved, which, k, value - limit[which])
-        n = int(np.argmin(value))
-        if value[n] < least:
-            least, where, when = float(value[n]), which[n], k
+        settle(moved, which, k, value, limit, due, least)
         k = int(due.min())
-    return Clearance(True, least, world.describe(where), float(t[when]), within)
+    return Clearance(True, float(least[0]), world.describe(int(least[1])), float(t[int(least[2])]),
+                     within)
+
+
+@kernel
+def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
+                moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
+                least: np.ndarray) -> tuple:
+    """
+    Go on with the check from instant k while the spheres decide every pair due.
+
+    At each instant the pairs due (``due`` <= k) get their sphere bounds at the link poses
+    (``poses_at`` of ``chain``, ``pair_lower_bounds`` of ``spheres``). While none comes within a
+    grid step of its limit (nor, with a finite ``margin``, below the least clearance so far or
+    within ``margin`` of this instant's least) they are settled (``settle``) and the check moves
+    on to the next instant due. Returns that instant (len(q): every instant is checked), the
+    pairs due there, their bounds, which of them coal must decide, and the link poses.
+    """
+    centres, radii, first, kinds, dims, inverse = spheres
+    last = len(q) - 1
+    while k <= last:
+        which = np.flatnonzero(due <= k)
+        poses = poses_at(*chain, q[k])
+        value = pair_lower_bounds(poses, centres, radii, first, pairs[which], kinds, dims,
+                                  inverse)
+        step = moved[min(k + 1, last)][which] - moved[k][which]
+        near = value - limit[which] <= step             # the spheres leave less than a step
+        near |= value < min(least[0], np.min(value) + margin)      # may be the least clearance
+        if near.any():
+            return k, which, value, near, poses
+        settle(moved, which, k, value, limit, due, least)
+        k = np.min(due)
+    return len(q), np.empty(0, np.int64), np.empty(0), np.empty(0, np.bool_), np.empty((0, 4, 4))
+
+
+@kernel
+def settle(moved: np.ndarray, which: np.ndarray, k: int, value: np.ndarray, limit: np.ndarray,
+           due: np.ndarray, least: np.ndarray) -> None:
+    """Schedule pairs ``which`` clear by ``value`` at instant k (``next_checks``); keep least."""
+    due[which] = next_checks(moved, which, k, value - limit[which])
+    n = np.argmin(value)
+    if value[n] < least[0]:
+        least[0], least[1], least[2] = value[n], which[n], k
 
 
 @kernel

@@ -25,13 +25,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from trajplan_ros.collision.arm_geometry import poses_at
 from trajplan_ros.collision.distances import CollisionWorld
-from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
 from trajplan_ros.planning.baselines import de, ga, pso, spso
-from trajplan_ros.planning.free_motion import free_joint_goal
+from trajplan_ros.planning.free_motion import free_joint_goal, settle, sphere_pass
 from trajplan_ros.planning.fuzzy import RewardPunishment
 from trajplan_ros.planning.iepso import iepso
 from trajplan_ros.planning.motion_profile import MotionProfile
@@ -363,19 +361,21 @@ def prepare() -> Warmup:
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
     the paper's arm once in each mode and a made-up six-joint arm once in free mode (a kernel's
     machine code serves every arm; the six joints reach the polish's SQP step), and computes
-    the collision check's sphere bounds once.
+    the collision check's pass on the spheres once.
     """
     def plans() -> None:
         for mode in Mode:
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
         arm = _six_joint_arm()
         plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
-        # the collision check's link poses and sphere bounds: two links of a sphere, a box
-        poses = poses_at(np.eye(4), np.stack([np.eye(3)] * 2), np.ones((2, 3)), np.ones(2),
-                         np.zeros(2), np.stack([np.eye(4)] * 2), np.array([-1, 1]),
-                         np.stack([np.eye(4)] * 2), np.zeros(2))
-        pair_lower_bounds(poses, np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]),
-                          np.array([[0, 1], [0, 2]]), np.zeros(1, np.int64), np.ones((1, 3)),
-                          np.eye(4)[None])
+        # the collision check's pass on the spheres: two links of one sphere each and a box
+        chain = (np.eye(4), np.stack([np.eye(3)] * 2), np.ones((2, 3)), np.ones(2), np.zeros(2),
+                 np.stack([np.eye(4)] * 2), np.array([-1, 1]), np.stack([np.eye(4)] * 2))
+        spheres = (np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]), np.zeros(1, np.int64),
+                   np.ones((1, 3)), np.eye(4)[None])
+        due, least = np.zeros(2, np.int64), np.array([np.inf, -1.0, 0.0])
+        sphere_pass(chain, spheres, np.array([[0, 1], [0, 2]]), np.zeros((3, 2)),
+                    np.zeros((3, 2)), np.full(2, -9.0), due, 0, -np.inf, least)
+        settle(np.zeros((3, 2)), np.arange(2), 0, np.zeros(2), np.full(2, -9.0), due, least)
 
     return warm_up(plans)
