@@ -18,6 +18,7 @@ point of the link by more than |dq_j| reach[j, l].
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import os
 from pathlib import Path
 
@@ -99,7 +100,7 @@ class ArmGeometry:
         q = np.atleast_2d(np.asarray(q, dtype=float))
         return np.stack([poses_at(*self.kernel_arrays, row) for row in q])
 
-    @property
+    @functools.cached_property
     def kernel_arrays(self) -> tuple[np.ndarray, ...]:
         """Return what ``poses_at`` takes before the joint angles."""
         arm = self.arm

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import os
+from typing import Any
 
 import coal
 import numpy as np
@@ -45,29 +46,30 @@ def _solids(shapes: tuple[Shape, ...]) -> list[tuple[coal.CollisionGeometry, np.
     return [(s.coal_geometry(), s.pose) for s in shapes]
 
 
-def _distance(one: list, one_pose: np.ndarray, other: list, other_pose: np.ndarray) -> float:
-    """Return coal's least distance between two sets of solids placed by their frames' poses."""
+def _placed(solids: list, pose: np.ndarray) -> list[tuple[coal.CollisionGeometry, Any]]:
+    """Return solids (geometry, pose in their frame) placed by their frame's pose, for coal."""
+    return [(g, _transform(pose @ p)) for g, p in solids]
+
+
+def _distance(one: list, other: list) -> float:
+    """Return coal's least distance between two sets of placed solids (``_placed``)."""
     best = np.inf
     request, result = coal.DistanceRequest(), coal.DistanceResult()
-    for g1, p1 in one:
-        t1 = _transform(one_pose @ p1)
-        for g2, p2 in other:
+    for g1, t1 in one:
+        for g2, t2 in other:
             result.clear()
-            best = min(best, coal.distance(g1, t1, g2, _transform(other_pose @ p2), request,
-                                           result))
+            best = min(best, coal.distance(g1, t1, g2, t2, request, result))
     return best
 
 
-def _within(one: list, one_pose: np.ndarray, other: list, other_pose: np.ndarray,
-            margin: float) -> bool:
-    """Return True when two sets of solids come closer than ``margin`` (coal, exact)."""
+def _within(one: list, other: list, margin: float) -> bool:
+    """Return True when two sets of placed solids come closer than ``margin`` (coal, exact)."""
     request, result = coal.CollisionRequest(), coal.CollisionResult()
     request.security_margin = margin
-    for g1, p1 in one:
-        t1 = _transform(one_pose @ p1)
-        for g2, p2 in other:
+    for g1, t1 in one:
+        for g2, t2 in other:
             result.clear()
-            if coal.collide(g1, t1, g2, _transform(other_pose @ p2), request, result):
+            if coal.collide(g1, t1, g2, t2, request, result):
                 return True
     return False
 
@@ -130,7 +132,8 @@ class ArmCollision:
                 *nothing) <= 0.0)
             for p in near:
                 i, j = pairs[p]
-                out[n, p] = _within(self._solids[i], poses[i], self._solids[j], poses[j], 0.0)
+                out[n, p] = _within(_placed(self._solids[i], poses[i]),
+                                    _placed(self._solids[j], poses[j]), 0.0)
         return out
 
 
@@ -159,7 +162,8 @@ class CollisionWorld:
         put(self, '_dims', np.array([s.dimensions + (0.0,) * (3 - len(s.dimensions))
                                      for s in shapes]).reshape(-1, 3))
         put(self, '_inverse', np.array([np.linalg.inv(s.pose) for s in shapes]).reshape(-1, 4, 4))
-        put(self, '_obstacles', [[(s.coal_geometry(), s.pose)] for s in shapes])
+        put(self, '_obstacles', [_placed([(s.coal_geometry(), s.pose)], np.eye(4))
+                                 for s in shapes])
         #: (P, n_joints): a turn dq moves pair p's links towards each other by at most
         #: sum_j |dq_j| sweep[p, j] (issue 29, item 4)
         put(self, 'sweep', np.array([self._sweep(a, b) for a, b in self.pairs]
@@ -196,26 +200,24 @@ class CollisionWorld:
 
     def exact(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return coal's distances of pairs ``which`` at link poses (links, 4, 4)."""
-        links = len(self.arm.geometry.links)
-        out = np.empty(len(which))
-        for n, (a, b) in enumerate(self.pairs[which]):
-            if b < links:
-                out[n] = _distance(self.arm._solids[a], poses[a], self.arm._solids[b], poses[b])
-            else:
-                out[n] = _distance(self.arm._solids[a], poses[a], self._obstacles[b - links],
-                                   np.eye(4))
-        return out
+        placed: dict[int, list] = {}
+        return np.array([_distance(*self._solids_of(poses, p, placed)) for p in which],
+                        dtype=float)
 
     def within(self, poses: np.ndarray, pair: int, margin: float) -> bool:
         """Return True when pair ``pair`` is closer than ``margin`` (m) at link poses (exact)."""
         if margin < 0.0:                  # coal takes no negative margin: compare the distance
             return bool(self.exact(poses, np.array([pair]))[0] < margin)
-        a, b = self.pairs[pair]
+        return _within(*self._solids_of(poses, pair, {}), margin)
+
+    def _solids_of(self, poses: np.ndarray, pair: int, placed: dict[int, list]
+                   ) -> tuple[list, list]:
+        """Return pair ``pair``'s two sets of placed solids; links placed once into ``placed``."""
         links = len(self.arm.geometry.links)
-        if b < links:
-            return _within(self.arm._solids[a], poses[a], self.arm._solids[b], poses[b], margin)
-        return _within(self.arm._solids[a], poses[a], self._obstacles[b - links], np.eye(4),
-                       margin)
+        for link in (n for n in self.pairs[pair] if n < links and n not in placed):
+            placed[link] = _placed(self.arm._solids[link], poses[link])
+        a, b = self.pairs[pair]
+        return placed[a], placed[b] if b < links else self._obstacles[b - links]
 
     def describe(self, pair: int) -> str:
         """Return a pair as 'link with link' or "link with 'obstacle'"."""

@@ -108,11 +108,11 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
     due = np.zeros(len(world.pairs), dtype=np.int64)
     least = np.array([np.inf, -1.0, 0.0])                  # clearance, pair, instant
     margin = world.padding if exact_clearance else -np.inf
+    chain, spheres = world.arm.geometry.kernel_arrays, world.bound_arrays
     k = 0
     while k < len(t):
-        k, which, value, near, poses = sphere_pass(
-            world.arm.geometry.kernel_arrays, world.bound_arrays, world.pairs, q, moved, limit,
-            due, k, margin, least)
+        k, which, value, near, poses = sphere_pass(chain, spheres, world.pairs, q, moved, limit,
+                                                   due, k, margin, least)
         if k == len(t):
             break
         value[near] = world.exact(poses, which[near])
