@@ -8,8 +8,9 @@ the text is untrusted and read by defusedxml). Without one, ``computed_skip_pair
 once per arm as MoveIt Setup Assistant does, deterministically (fixed seed): links that are
 adjacent (one's parent joint hangs from the other, or no planned joint moves one against the
 other), pairs in contact at the default pose (every joint at 0, or the limit nearest it), and
-pairs in contact in at least ``ALWAYS`` of ``SAMPLES`` random configurations. Unlike MoveIt it
-does not skip pairs that were never seen in contact: a rare contact is a real one.
+pairs in contact in at least ``ALWAYS`` of ``SAMPLES`` random configurations (a pair is no longer
+sampled once it has missed contact too often to get there). Unlike MoveIt it does not skip
+pairs that were never seen in contact: a rare contact is a real one.
 """
 from __future__ import annotations
 
@@ -95,16 +96,19 @@ def computed_skip_pairs(geometry: ArmGeometry, parent_of: Callable[[str], str | 
     pairs = np.array([(i, j) for i in range(len(names)) for j in range(i + 1, len(names))
                       if _pair(names[i], names[j]) not in adjacent], dtype=np.int64).reshape(-1, 2)
     default = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
-    touching = {_pair(names[i], names[j])
-                for i, j in pairs[in_contact(default[None], pairs)[0]]}
+    at_default = in_contact(default[None], pairs)[0]
+    touching = {_pair(names[i], names[j]) for i, j in pairs[at_default]}
+    pairs = pairs[~at_default]
     rng = np.random.default_rng(SEED)
     lower = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
     upper = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
-    counts = np.zeros(len(pairs))
+    misses = np.zeros(len(pairs))             # samples without contact, per pair
     for chunk in np.array_split(np.arange(samples), max(1, samples // 1000)):
-        counts += in_contact(rng.uniform(lower, upper, (len(chunk), arm.n_joints)),
-                             pairs).sum(axis=0)
-    always = {_pair(names[i], names[j]) for i, j in pairs[counts >= ALWAYS * samples]}
+        q = rng.uniform(lower, upper, (len(chunk), arm.n_joints))
+        undecided = np.flatnonzero(misses <= (1.0 - ALWAYS) * samples)   # others: never always
+        if undecided.size:
+            misses[undecided] += len(chunk) - in_contact(q, pairs[undecided]).sum(axis=0)
+    always = {_pair(names[i], names[j]) for i, j in pairs[misses <= (1.0 - ALWAYS) * samples]}
     reasons = {'adjacent': len(adjacent), 'default': len(touching),
                'always': len(always - touching)}
     return frozenset(adjacent | touching | always), reasons

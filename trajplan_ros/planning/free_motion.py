@@ -49,8 +49,11 @@ GRID_SWEEP = 1e-3
 MAX_GRID = 20_000
 #: How much closer (m) a pair within the padding at the start may come: the check's resolution.
 START_TOLERANCE = 2 * GRID_SWEEP
-#: Random joint vectors the search projects onto the goal's solutions.
-SAMPLES = 48
+#: Random joint vectors the search projects onto the goal's solutions (a goal's free
+#: solutions can be few: 48 missed the fastest free one on goals of the bench).
+SAMPLES = 192
+#: Newton steps of that projection.
+PROJECTION_STEPS = 12
 #: Bisection steps from the best free candidate towards a faster colliding one.
 BISECTIONS = 6
 
@@ -222,7 +225,7 @@ class SearchOutcome:
     checked: int                  # motions checked
 
 
-def project(obj: Objective, x: np.ndarray, steps: int = 8) -> np.ndarray:
+def project(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STEPS) -> np.ndarray:
     """Return joint vectors x (K, m) after Newton steps onto the goal's solutions."""
     for _ in range(steps):
         here = Linearisation(obj, x, 1.0, newton_only=True)

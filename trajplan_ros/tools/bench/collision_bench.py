@@ -137,7 +137,7 @@ def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega
     obj = Objective(bench.arm, goal, bench.start, omega=omega)
     law = MotionProfile().time_law(bench.arm, omega)
     rng = np.random.default_rng(12345)
-    projected = project(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)), 12)
+    projected = project(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(*obj.tool(x)) <= 1e-6]
     for candidate in x[np.argsort(obj.motion_time(x), kind='stable')]:
