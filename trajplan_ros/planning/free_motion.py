@@ -114,12 +114,11 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
     chain, spheres = world.arm.geometry.kernel_arrays, world.bound_arrays
     k = 0
     while k < len(t):
-        k, which, value, near, poses = sphere_pass(chain, spheres, world.pairs, q, moved, limit,
-                                                   due, k, margin, least)
+        k, which, value, step, near, poses = sphere_pass(chain, spheres, world.pairs, q, moved,
+                                                         limit, due, k, margin, least)
         if k == len(t):
             break
         value[near] = world.exact(poses, which[near])
-        step = moved[min(k + 1, len(t) - 1), which] - moved[k, which]
         bad = np.flatnonzero(value <= limit[which] + step)
         if bad.size:
             p = which[bad[0]]
@@ -142,7 +141,8 @@ def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
     grid step of its limit (nor, with a finite ``margin``, below the least clearance so far or
     within ``margin`` of this instant's least) they are settled (``settle``) and the check moves
     on to the next instant due. Returns that instant (len(q): every instant is checked), the
-    pairs due there, their bounds, which of them coal must decide, and the link poses.
+    pairs due there, their bounds, how far each may come closer by the next instant, which of
+    them coal must decide, and the link poses.
     """
     centres, radii, first, kinds, dims, inverse = spheres
     last = len(q) - 1
@@ -155,10 +155,12 @@ def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
         near = value - limit[which] <= step             # the spheres leave less than a step
         near |= value < min(least[0], np.min(value) + margin)      # may be the least clearance
         if near.any():
-            return k, which, value, near, poses
+            return k, which, value, step, near, poses
         settle(moved, which, k, value, limit, due, least)
         k = np.min(due)
-    return len(q), np.empty(0, np.int64), np.empty(0), np.empty(0, np.bool_), np.empty((0, 4, 4))
+    nothing = np.empty(0)
+    return (len(q), np.empty(0, np.int64), nothing, nothing, np.empty(0, np.bool_),
+            np.empty((0, 4, 4)))
 
 
 @kernel
