@@ -71,9 +71,20 @@ class IndependentCheck:
         self.base = world.arm.geometry.arm.base_link
         self.joints = world.arm.geometry.arm.joint_names
 
-    def _poses(self, q: np.ndarray) -> list[np.ndarray]:
-        self.robot.update_cfg(dict(zip(self.joints, q)))
-        return [self.robot.get_transform(name, self.base) for name in self.names]
+    def _poses(self, q: np.ndarray) -> np.ndarray:
+        """Return every link's pose at each of joint angles q (N, n), (N, links, 4, 4)."""
+        out = []
+        for row in np.atleast_2d(q):
+            self.robot.update_cfg(dict(zip(self.joints, row)))
+            out.append([self.robot.get_transform(name, self.base) for name in self.names])
+        return np.array(out)
+
+    def _partner(self, b: int, poses: np.ndarray) -> tuple[list, np.ndarray]:
+        """Return the shapes of a pair's second member b and its poses (N, 4, 4)."""
+        links = len(self.names)
+        if b < links:
+            return self.links[b], poses[:, b]
+        return self.obstacles[b - links], np.broadcast_to(np.eye(4), poses[:, 0].shape)
 
     def _distance(self, one: list, one_pose: np.ndarray, other: list,
                   other_pose: np.ndarray) -> float:
@@ -88,14 +99,12 @@ class IndependentCheck:
 
     def distances(self, q: np.ndarray) -> np.ndarray:
         """Return every pair's distance at joint angles q (N, n), (N, pairs)."""
-        links = len(self.names)
-        out = np.empty((len(np.atleast_2d(q)), len(self.world.pairs)))
-        for k, row in enumerate(np.atleast_2d(q)):
-            poses = self._poses(row)
-            for p, (a, b) in enumerate(self.world.pairs):
-                other, pose = ((self.links[b], poses[b]) if b < links
-                               else (self.obstacles[b - links], np.eye(4)))
-                out[k, p] = self._distance(self.links[a], poses[a], other, pose)
+        poses = self._poses(q)
+        out = np.empty((len(poses), len(self.world.pairs)))
+        for p, (a, b) in enumerate(self.world.pairs):
+            other, other_poses = self._partner(b, poses)
+            out[:, p] = [self._distance(self.links[a], poses[k, a], other, other_poses[k])
+                         for k in range(len(poses))]
         return out
 
     def least(self, q: np.ndarray) -> tuple[float, str, int]:
@@ -111,18 +120,14 @@ class IndependentCheck:
         A pair within the padding at the start breaks it by coming closer than its start
         distance less ``tolerance``; any other by coming within the padding.
         """
-        q = np.atleast_2d(q)
-        poses = np.array([self._poses(row) for row in q])               # (N, links, 4, 4)
-        links, broken = len(self.names), []
+        poses, broken = self._poses(q), []
         for p, (a, b) in enumerate(self.world.pairs):
-            other = self.links[b] if b < links else self.obstacles[b - links]
-            other_poses = poses[:, b] if b < links else np.eye(4)[None]
+            other, other_poses = self._partner(b, poses)
             start = self._distance(self.links[a], poses[0, a], other, other_poses[0])
             limit = start - tolerance if start <= self.world.padding else self.world.padding
             near = np.flatnonzero(self._ball_bounds(self.links[a], poses[:, a], other,
                                                     other_poses) <= limit)
-            least = min((self._distance(self.links[a], poses[k, a], other,
-                                        other_poses[min(k, len(other_poses) - 1)])
+            least = min((self._distance(self.links[a], poses[k, a], other, other_poses[k])
                          for k in near), default=np.inf)
             if least <= limit:
                 broken.append(f'{self.world.describe(p)} at {least:.4g} m')
