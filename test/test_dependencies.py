@@ -6,7 +6,12 @@ package.xml declares what the package needs at run time, with keys that rosdep k
 * setup.py's ``install_requires`` (for pip) and package.xml's python3-* run keys (for rosdep)
   name the same distributions, through one table: ``DISTRIBUTION_KEYS``;
 * every python3-* key is defined by rosdep itself (``rosdep_keys.yaml``, the entries copied
-  from ros/rosdistro), so a misspelt key fails, and a pip key installs the table's distribution;
+  from ros/rosdistro) or by the package's own rosdep source (``resource/rosdep.yaml``), so a
+  misspelt key fails, and a pip key installs the table's distribution;
+* every key resolves on Ubuntu 24.04 (noble), Jazzy's platform, as ``rosdep install`` resolves
+  it there: to pip, to an apt package noble has (``ubuntu_noble_apt.txt``) or to a ROS package
+  that Jazzy releases (``rosdistro_jazzy.yaml``);
+* the tests run at the oldest numba that setup.py admits, the one the rosdep source asks for;
 * every other key is a ROS package in the ament index (test keys: a wheel of the lint extra);
 * every third-party module that a module of the package imports when it is loaded is declared
   (imports inside functions are optional extras: scipy for the bench, matplotlib for figures).
@@ -26,18 +31,27 @@ import xml.etree.ElementTree as ET
 
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
+from packaging.version import Version
 import pytest
 import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'trajplan_ros'
 ROSDEP_YAML = Path(__file__).with_name('rosdep_keys.yaml')
+#: The package's own rosdep source, for keys rosdistro lacks (a user lists it before rosdep's).
+SHIPPED_ROSDEP_YAML = REPO / 'resource' / 'rosdep.yaml'
+#: Jazzy's release platforms and the repositories of the ROS packages package.xml names.
+ROSDISTRO_YAML = Path(__file__).with_name('rosdistro_jazzy.yaml')
+#: The apt packages of Ubuntu noble that rosdep may resolve a key to, outside ROS's repository.
+NOBLE_APT = Path(__file__).with_name('ubuntu_noble_apt.txt')
+#: The installers rosdep names in a rule (REP 111), as opposed to an OS release's codename.
+INSTALLERS = ('apt', 'pip', 'source')
 
 #: PyPI distribution (canonical name) -> its rosdep key. Adding a dependency: a line here, the
 #: requirement in setup.py, the key in package.xml and its entry in rosdep_keys.yaml.
 DISTRIBUTION_KEYS = {
     'defusedxml': 'python3-defusedxml',
-    'numba': 'python3-numba',
+    'numba': 'python3-numba-pip',
     'numpy': 'python3-numpy',
     'pytest': 'python3-pytest',
     'pyyaml': 'python3-yaml',
@@ -91,19 +105,88 @@ def is_python_key(key: str) -> bool:
 # --- what rosdep and the ament index define ----------------------------------------------------
 
 @lru_cache(maxsize=None)
-def rosdep_definitions() -> dict[str, Any]:
+def copied_definitions() -> dict[str, Any]:
     """Return the rosdep entries copied from ros/rosdistro: key -> rules per OS."""
     return yaml.safe_load(ROSDEP_YAML.read_text(encoding='utf-8'))
 
 
-def pip_packages(rules: Any) -> Iterator[str]:
-    """Yield every PyPI name of a rosdep entry's ``pip: packages:`` lists (for any OS)."""
+@lru_cache(maxsize=None)
+def shipped_definitions() -> dict[str, Any]:
+    """Return the entries of the package's own rosdep source."""
+    return yaml.safe_load(SHIPPED_ROSDEP_YAML.read_text(encoding='utf-8'))
+
+
+def rosdep_definitions() -> dict[str, Any]:
+    """Return every key rosdep knows here; the shipped source is listed first, so it wins."""
+    return {**copied_definitions(), **shipped_definitions()}
+
+
+def pip_requirements(rules: Any) -> Iterator[Requirement]:
+    """Yield every requirement of a rosdep entry's ``pip: packages:`` lists (for any OS)."""
     if isinstance(rules, dict):
         for installer, value in rules.items():
             if installer == 'pip' and isinstance(value, dict):
-                yield from value.get('packages', [])
+                yield from (Requirement(p) for p in value.get('packages', []))
             else:
-                yield from pip_packages(value)
+                yield from pip_requirements(value)
+
+
+def pip_packages(rules: Any) -> Iterator[str]:
+    """Yield every PyPI name of a rosdep entry's ``pip: packages:`` lists (for any OS)."""
+    yield from (requirement.name for requirement in pip_requirements(rules))
+
+
+# --- how rosdep resolves a key on Ubuntu noble --------------------------------------------------
+
+@lru_cache(maxsize=None)
+def jazzy_packages(os_name: str, codename: str) -> frozenset[str]:
+    """Return the ROS packages Jazzy releases, empty unless it releases for that platform."""
+    distribution = yaml.safe_load(ROSDISTRO_YAML.read_text(encoding='utf-8'))
+    if codename not in distribution['release_platforms'].get(os_name, []):
+        return frozenset()
+    return frozenset(package for name, repository in distribution['repositories'].items()
+                     for package in repository['release'].get('packages', [name]))
+
+
+@lru_cache(maxsize=None)
+def noble_apt_packages() -> frozenset[str]:
+    """Return the apt packages of ``ubuntu_noble_apt.txt``."""
+    lines = NOBLE_APT.read_text(encoding='utf-8').splitlines()
+    return frozenset(line.strip() for line in lines if line.strip() and not line.startswith('#'))
+
+
+def rule_for(rules: Any, os_name: str, codename: str) -> Any:
+    """Return an entry's rule for one OS release (REP 111: OS, then codename, ``*`` for any)."""
+    rule = rules.get(os_name, rules.get('*')) if isinstance(rules, dict) else None
+    if isinstance(rule, dict) and not set(rule) & set(INSTALLERS):
+        rule = rule.get(codename, rule.get('*'))
+    return rule
+
+
+def resolve(key: str, definitions: Mapping[str, Any], os_name: str = 'ubuntu',
+            codename: str = 'noble') -> tuple[str, list[str]] | None:
+    """
+    Return what ``rosdep install`` installs for ``key`` there: (installer, packages).
+
+    None where nothing does: an unknown key, a rule that names no package, or apt packages that
+    the release does not have.
+    """
+    if key in definitions:
+        rule = rule_for(definitions[key], os_name, codename)
+        if isinstance(rule, list):
+            rule = {'apt': {'packages': rule}}
+        if not isinstance(rule, dict) or len(rule) != 1:
+            return None
+        (installer, spec), = rule.items()
+        packages = spec.get('packages', []) if isinstance(spec, dict) else spec
+        if installer not in INSTALLERS or not packages:
+            return None
+        if installer == 'apt' and not set(packages) <= noble_apt_packages():
+            return None
+        return installer, list(packages)
+    if key in jazzy_packages(os_name, codename):
+        return 'apt', ['ros-jazzy-' + key.replace('_', '-')]
+    return None
 
 
 def ament_prefixes() -> list[Path]:
@@ -213,10 +296,35 @@ def test_rosdep_key_installs_the_mapped_distribution(dist: str, key: str) -> Non
 
 
 def test_rosdep_copy_is_the_mapped_keys_with_their_source() -> None:
-    assert set(rosdep_definitions()) == set(DISTRIBUTION_KEYS.values())
+    upstream = set(DISTRIBUTION_KEYS.values()) - set(shipped_definitions())
+    assert set(copied_definitions()) == upstream | {'python3-numba'}
     header = ROSDEP_YAML.read_text(encoding='utf-8').partition('\n\n')[0]
     assert 'https://github.com/ros/rosdistro' in header and 'rosdep/python.yaml' in header
     assert any(len(w) == 40 and set(w) <= set('0123456789abcdef') for w in header.split())
+
+
+@pytest.mark.parametrize('key', sorted(package_keys()))
+def test_key_resolves_on_ubuntu_noble(key: str) -> None:
+    assert resolve(key, rosdep_definitions()) is not None, \
+        f'{key}: rosdep installs nothing for it on Ubuntu 24.04 (noble)'
+
+
+def test_a_key_noble_has_no_package_for_resolves_to_nothing() -> None:
+    assert resolve('python3-numba', rosdep_definitions()) is None      # noble has no numba
+    assert resolve('python3-numba', rosdep_definitions(), 'debian', 'bookworm') is None
+    assert resolve('no_such_package', rosdep_definitions()) is None
+    assert resolve('rclpy', rosdep_definitions()) == ('apt', ['ros-jazzy-rclpy'])
+    assert resolve('rclpy', rosdep_definitions(), 'ubuntu', 'jammy') is None
+
+
+def test_shipped_numba_key_asks_for_setup_pys_floor_and_the_tests_run_there() -> None:
+    requirements = [Requirement(r) for r in setup_argument('install_requires')]
+    floor = next(r.specifier for r in requirements if r.name == 'numba')
+    shipped, = pip_requirements(shipped_definitions()[DISTRIBUTION_KEYS['numba']])
+    assert shipped.specifier == floor, f'resource/rosdep.yaml asks for {shipped}, setup.py {floor}'
+    oldest, = (s.version for s in floor if s.operator == '>=')
+    assert Version(importlib.metadata.version('numba')) == Version(oldest), \
+        f'the tests run on numba {importlib.metadata.version("numba")}, not the floor {oldest}'
 
 
 @pytest.mark.parametrize('tag, key', sorted(
