@@ -140,7 +140,10 @@ def test_the_first_run_compiles_and_says_so_later_ones_load(empty_kernel_cache: 
     env = {**os.environ, 'NUMBA_CACHE_DIR': str(empty_kernel_cache)}
     first = run_plan(env)
     assert first.returncode == 0, first.stderr
-    assert 'trajplan: compiled ' in first.stderr and 'planning kernels in' in first.stderr
+    said = first.stderr.splitlines()
+    assert said[0].startswith('trajplan: compiling ') and 'for the first time' in said[0], said
+    assert 'about a minute' in said[0]
+    assert said[1].startswith('trajplan: compiled ') and 'planning kernels in' in said[1], said
     again = run_plan(env)
     assert again.returncode == 0, again.stderr
     assert again.stderr == ''

@@ -17,7 +17,8 @@ the package version and a hash of every source file of the core (``kinematics``,
 a kernel may call kernels and read constants of other core files and can never run stale.
 
 ``warm_up`` compiles or loads every kernel once, so that no plan pays for it; it reports how
-long that took and whether anything had to be compiled.
+long that took and whether anything had to be compiled. ``uncached`` tells beforehand how many
+kernels have nothing on disk yet, so that a first start can say that it is compiling.
 """
 from __future__ import annotations
 
@@ -33,12 +34,15 @@ from typing import Any, Callable
 import numba
 from numba.core import caching, types
 
-__all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'warm_up']
+__all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'uncached',
+           'warm_up']
 
 _LOG = logging.getLogger('trajplan_ros')
 #: The folders whose sources key every kernel's cache: the kernels and all they read.
 CORE = tuple(Path(__file__).resolve().parents[1] / name for name in ('kinematics', 'collision',
                                                                      'planning'))
+#: How long compiling every kernel takes (doc/benchmarks.md: the first start).
+FIRST_COMPILE = 'about a minute on two idle cores, longer on a busy machine'
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
@@ -154,6 +158,18 @@ def kernels() -> tuple[Any, ...]:
     return tuple(_KERNELS)
 
 
+def uncached() -> int:
+    """
+    Return how many kernels have no machine code on disk yet (none kept: every kernel).
+
+    Inlined kernels are left out: they are compiled into their callers, never on their own.
+    """
+    def on_disk(compiled: Any) -> bool:
+        index = getattr(getattr(compiled._cache, '_cache_file', None), '_index_path', None)
+        return index is not None and Path(index).is_file()
+    return sum(not on_disk(k) for k in _KERNELS if k.targetoptions.get('inline') != 'always')
+
+
 @dataclass(frozen=True)
 class Warmup:
     """What ``warm_up`` did: its time (s) and how many kernels it compiled or loaded."""
@@ -170,15 +186,21 @@ class Warmup:
         return f'loaded {self.loaded} compiled planning kernels in {self.seconds:.2f} s'
 
 
-def warm_up(run: Callable[[], object]) -> Warmup:
+def warm_up(run: Callable[[], object],
+            announce: Callable[[str], object] | None = None) -> Warmup:
     """
     Call ``run`` (which calls every kernel once) and count what it compiled or loaded.
 
-    A kernel's new machine code is either loaded (numba's cache hits) or compiled.
+    A kernel's new machine code is either loaded (numba's cache hits) or compiled. Where some
+    kernel has nothing on disk yet, ``announce`` is told so first, with how long a compile takes.
     """
     def loaded() -> int:
         return sum(sum(k.stats.cache_hits.values()) for k in _KERNELS)
 
+    missing = uncached()
+    if missing and announce is not None:
+        announce(f'compiling {missing} planning kernels for the first time: {FIRST_COMPILE} '
+                 '(later starts load them in about a second)')
     overloads, hits = {k: len(k.overloads) for k in _KERNELS}, loaded()
     began = time.perf_counter()
     run()

@@ -354,9 +354,11 @@ def _six_joint_arm() -> ArmModel:
                             upper=[np.pi] * 6)
 
 
-def prepare() -> Warmup:
+def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
     """
     Compile or load the kernels ``plan`` uses, so that no plan pays for it; say what it did.
+
+    Where that means compiling, ``announce`` is told so first, with about how long it takes.
 
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
     the paper's arm once in each mode and a made-up six-joint arm once in free mode (a kernel's
@@ -378,4 +380,4 @@ def prepare() -> Warmup:
                     np.zeros((3, 2)), np.full(2, -9.0), due, 0, -np.inf, least)
         settle(np.zeros((3, 2)), np.arange(2), 0, np.zeros(2), np.full(2, -9.0), due, least)
 
-    return warm_up(plans)
+    return warm_up(plans, announce)

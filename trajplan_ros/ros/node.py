@@ -148,9 +148,6 @@ class PlannerNode(Node):
         self._topic_semantic = ''                     # the last robot_description_semantic
         self._live = LiveScene()                      # obstacles from collision_objects
         self._settings = Settings.from_parameters(self._parameter_values())
-        kernels = prepare()                     # before the service is offered: no plan waits
-        log = self.get_logger().info if kernels.compiled else self.get_logger().debug
-        log(kernels.describe())
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -188,9 +185,6 @@ class PlannerNode(Node):
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
-        self.get_logger().info(f'ready: {jobs.describe_arm(self._settings)}, '
-                               f'{self._settings.algorithm}, {self._settings.omega} rad/s, '
-                               f'{self._settings.profile.describe()} profile')
 
     # --- parameters -------------------------------------------------------------------------
 
@@ -388,6 +382,7 @@ class PlannerNode(Node):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=frame_id)
 
     def _work(self) -> None:
+        self._prepare()
         while (job := self._mailbox.take()) is not None:
             self._current = job
             try:
@@ -398,6 +393,20 @@ class PlannerNode(Node):
                                         f'{reason}')
                 self._give_up(job, status='failed', reason=reason)
             self._current = None
+
+    def _prepare(self) -> None:
+        """
+        Compile or load the kernels before the first plan, saying so; then log ``ready``.
+
+        Goals and calls that come meanwhile wait in the mailbox: the service is offered at once,
+        even while a first start compiles for a minute.
+        """
+        kernels = prepare(self.get_logger().info)
+        log = self.get_logger().info if kernels.compiled else self.get_logger().debug
+        log(kernels.describe())
+        s = self._settings
+        self.get_logger().info(f'ready: {jobs.describe_arm(s)}, {s.algorithm}, {s.omega} rad/s, '
+                               f'{s.profile.describe()} profile')
 
     def _handle(self, job: Job) -> None:
         outcome = self._plan(job)

@@ -6,6 +6,11 @@ Benchmark of the ROS 2 planner node over DDS: ``python -m trajplan_ros.tools.ben
 The node runs as a child process (``node_process.PlannerProcess``: a DDS domain of its own,
 localhost discovery) with its default parameters; this process is its client.
 
+0. Start-up: when the service is offered and when the node is ready to plan (its kernels
+   compiled or loaded). Target: the service within 30 s of the start, also on the first start
+   after an install, when the node compiles its kernels (run it with an empty
+   ``NUMBA_CACHE_DIR`` to see that case).
+
 1. Service overhead. ``--calls`` plan_trajectory calls on tool positions of seeded random
    in-limit configurations, each sent when the node is idle (it has logged the call before, its
    last step). A call's overhead is its round trip measured here (request sent to response
@@ -48,7 +53,8 @@ from rcl_interfaces.srv import GetParameters
 from rclpy.utilities import get_rmw_implementation_identifier
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning.planner import plan, prepare
-from trajplan_ros.tools.node_process import describe_goal, PlannerProcess, ros_environment
+from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, describe_goal, PlannerProcess,
+                                             ros_environment)
 from trajplan_ros.tools.ros_client import RosClient
 
 
@@ -57,6 +63,8 @@ __all__ = ['main']
 #: The targets of issue 3 (the parameter get's tightened by issue 27).
 MAX_MEDIAN_OVERHEAD_S = 5e-3
 MAX_PARAMETER_LATENCY_S = 0.02
+#: The service is offered within this time (s) of the start, even on a first start's compile.
+MAX_START_S = 30.0
 #: Liveness bound for a single answer or for the stream to be accounted for.
 TIMEOUT_S = 120.0
 
@@ -316,11 +324,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     node = PlannerProcess(_description_args(args, folder.name), env=env)
     ros = RosClient('trajplan_bench')
     try:
-        ready = node.wait_for(r'\]: ready: ', TIMEOUT_S)
+        ros.client(GetPlan, 'plan_trajectory')
+        offered = time.perf_counter() - began
+        ready = node.wait_for(r'\]: ready: ', COMPILE_BOUND_S)
         kernels = node.wait_for(r'\]: ((?:compiled|loaded) .*planning kernels in .*)$', 0.0)
-        print(f'start-up: service offered {time.perf_counter() - began:.2f} s after the start'
+        print(f'start-up: service offered {offered:.2f} s after the start (target: '
+              f'{MAX_START_S:g} s); ready to plan after {time.perf_counter() - began:.2f} s'
               if ready else 'start-up: the node did not get ready',
               f'({kernels.group(1)})' if kernels else '')
+        met_start = bool(ready) and offered <= MAX_START_S
         here = _in_process(arm, call_goals)         # after the start: it may share a cache
         met_service, service_lines = _service_phase(node, ros, call_goals, burst_goals)
         print('\n'.join(service_lines[:5]))
@@ -336,7 +348,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if code != 0 or any('Traceback' in line for line in node.lines):
         print(f'planner_node exited with {code}:\n' + '\n'.join(node.lines[-20:]))
         return 1
-    return 0 if met_service and met_stream else 1
+    return 0 if met_start and met_service and met_stream else 1
 
 
 if __name__ == '__main__':

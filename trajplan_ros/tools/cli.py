@@ -202,7 +202,7 @@ def _run_plan(args: argparse.Namespace) -> int:
                 'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
                 'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity,
                 'profile': args.motion, 'world': world_from_arguments(args, arm)}
-    kernels = prepare()
+    kernels = prepare(lambda text: print(f'trajplan: {text}', file=sys.stderr, flush=True))
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
     if args.goals is None:
