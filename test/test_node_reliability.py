@@ -147,7 +147,11 @@ def test_every_goal_of_a_flood_is_accounted_for(lone_node, peer) -> None:
     peer.node.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
     publisher = peer.node.create_publisher(Point, f'{ns}/goal', KEEP_ALL)
     peer.publisher(Point, f'{ns}/goal')                  # waits until the node subscribes
-    for g in sent:
+    # the first goal alone, until the node has planned it: seeing the node's reader does not
+    # mean it has matched this publisher yet, and goals written before that never arrive
+    publisher.publish(Point(x=sent[0][0], y=sent[0][1], z=sent[0][2]))
+    lone_node.wait_for(rf'\]: goal #1 {fmt(sent[0])} m from')
+    for g in sent[1:]:
         publisher.publish(Point(x=g[0], y=g[1], z=g[2]))
     settled = {}
     for g in sent:
