@@ -34,7 +34,8 @@ from typing import Any
 import numpy as np
 
 from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.rest_to_rest import advance, joint_profiles, JointProfiles
+from trajplan_ros.planning.rest_to_rest import (GAP_NS, joint_profiles, JointProfiles,
+                                                SMALLEST_TURN)
 from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw
 
 __all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory',
@@ -236,18 +237,20 @@ def motion_trajectory(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing:
     Servo: ``servo_trajectory`` at each joint's velocity, or (synchronized) at the velocity that
     brings it to the goal at the end, a straight line. Trapezoidal and jerk-limited: each
     joint's profile (``rest_to_rest``, its phases whole nanoseconds), with a point at every
-    joint's phase boundary and every ``sample_period`` (a sample within ``_SAMPLE_GAP`` of a
-    boundary left out). Trapezoidal points carry positions and velocities: the controller's
-    cubics are then the profile's quadratics; jerk-limited ones also accelerations: its
-    quintics are the profile's cubics. The last point, at the end, is at rest at the goal.
+    joint's phase boundary and every ``sample_period`` (a sample near a boundary left out:
+    ``_profile_times_ns``). Trapezoidal points carry positions and velocities: the
+    controller's cubics are then the profile's quadratics; jerk-limited ones also
+    accelerations: its quintics are the profile's cubics. The last point, at the end, is at
+    rest at the goal.
 
     Each point's values are the profile's at its time, but a point's position is a double,
-    rounded, and over a short segment (two boundaries close together) a polynomial fitted to
-    rounded ends can have a large acceleration or jerk. So positions are rounded to
-    ``_MANTISSA`` bits, which makes the controller's 3, 12, 20 and 30 times them exact
-    (``_short_mantissas``), and the velocities at both ends of a segment are shifted by the
-    rounding over its duration (``_absorb_rounding``): its polynomial is then the profile's
-    plus a linear term.
+    rounded, and a polynomial fitted to rounded ends is off by an acceleration and a jerk that
+    grow as its segment shortens. So positions are computed in extended precision
+    (``JointProfiles.turn``) and rounded once, to ``_bits`` significant bits, which makes the
+    controller's 3 (cubic) or 12, 20 and 30 (quintic) times them exact
+    (``_short_mantissas``), and no segment is shorter than ``_segment_ns``, over which that
+    rounding keeps within a share of the tolerance: the profiles keep their boundaries that
+    far apart (``rest_to_rest._place``), the samples too.
     """
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     names = joint_names or tuple(f'joint{i + 1}' for i in range(start.size))
@@ -256,12 +259,11 @@ def motion_trajectory(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing:
                                 sample_period=sample_period, joint_names=names)
     profiles = _profiles(start, goal, law, timing)
     t_ns = _profile_times_ns(profiles, sample_period)
-    # the state at t = 0 and at every point: the phase that starts there, for the next segment
-    turn, velocity, acceleration, jerk = profiles.sample(np.concatenate(([0], t_ns)))
-    positions = _short_mantissas(start + turn[1:])
+    # the state at every point: the phase that starts there, for the next segment
+    _, velocity, acceleration, _ = profiles.sample(t_ns)
+    turn = profiles.turn(t_ns)
+    positions = _short_mantissas(start.astype(np.longdouble) + turn, _bits(law)).astype(float)
     positions[-1] = goal
-    _absorb_rounding(t_ns, start, positions, (velocity, acceleration, jerk))
-    velocity, acceleration = velocity[1:], acceleration[1:]
     velocity[-1], acceleration[-1] = 0.0, 0.0
     return Trajectory(tuple(names), start, t_ns / 1e9, positions, velocity,
                       acceleration if law.kind == JERK_LIMITED else None)
@@ -321,8 +323,57 @@ def _profiles(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing
     """Return each joint's profile, stretched to the slowest joint's end if synchronized."""
     if start.shape != goal.shape or start.ndim != 1 or law.velocity.shape != start.shape:
         raise ValueError('start, goal and the time law must be of the same joints')
+    gap_ns, first_ns = _segment_ns(start, goal, law)
     return joint_profiles(goal - start, law.velocity, law.acceleration, law.jerk,
-                          synchronized=timing is Timing.SYNCHRONIZED)
+                          synchronized=timing is Timing.SYNCHRONIZED, gap_ns=gap_ns,
+                          first_ns=first_ns)
+
+
+#: Significant bits of a published profile position: the controller's 3 times it (cubic), or
+#: 12, 20 and 30 times it (quintic), are then exact.
+_CUBIC_BITS = 51
+_QUINTIC_BITS = 49
+#: The share of the tolerance under the controller (relative to a limit) that the rounding of
+#: the positions may take; the controller's other roundings take less than 1e-7 of the rest.
+_ACCELERATION_SHARE = 0.75e-6
+_JERK_SHARE = 0.75e-3
+#: The most a position computed by ``JointProfiles.turn`` is off, in its type's last bits.
+_WORK_ULPS = 16
+
+
+def _bits(law: TimeLaw) -> int:
+    """Return the significant bits of a position published under ``law``."""
+    return _QUINTIC_BITS if law.kind == JERK_LIMITED else _CUBIC_BITS
+
+
+def _segment_ns(start: np.ndarray, goal: np.ndarray, law: TimeLaw) -> tuple[int, int]:
+    """
+    Return the shortest segment (ns) whose polynomial the positions' rounding keeps in limits.
+
+    And the shortest first segment. A position rounded to ``_bits`` is off by at most e, half
+    its last bit (the largest where the joint turns: between start and goal). The
+    controller's polynomial over T seconds through two such ends is off by e (3 s^2 - 2 s^3)
+    (cubic) or e (10 s^3 - 15 s^4 + 6 s^5) (quintic) per end, s = t / T: its acceleration by
+    at most 12 e / T^2 and its jerk by 120 e / T^3. So T must be at least
+    sqrt(12 e / (share a)) and cbrt(120 e / (share j)) for every moving joint, and
+    ``GAP_NS``. The first segment starts at the state, whose position has 53 bits: the
+    quintic's 12, 20 and 30 times it are rounded, by up to e, 2 e and 2 e, so its
+    acceleration is off by up to 34 e / T^2 (its jerk still 120 e / T^3; the last segment's
+    errors, from the goal's, grow as the profile's acceleration falls to zero). e also holds
+    ``_WORK_ULPS`` last bits of ``np.longdouble``, in which the positions are computed: where
+    that is no wider than a double, their own rounding is that large.
+    """
+    turn = np.abs(goal - start)
+    _, exponent = np.frexp(np.maximum(np.abs(start), np.abs(goal)))
+    work = _WORK_ULPS * np.ldexp(1.0, exponent - 1 - np.finfo(np.longdouble).nmant)
+    e = (np.ldexp(1.0, exponent - _bits(law) - 1) + work)[turn > SMALLEST_TURN]
+    a, j = law.acceleration[turn > SMALLEST_TURN], law.jerk[turn > SMALLEST_TURN]
+    first = 34.0 if law.kind == JERK_LIMITED else 12.0
+    with np.errstate(divide='ignore'):
+        jerk = np.cbrt(120.0 * e / (_JERK_SHARE * j))
+        seconds = [np.max(np.maximum(np.sqrt(k * e / (_ACCELERATION_SHARE * a)), jerk),
+                          initial=0.0) for k in (12.0, first)]
+    return tuple(max(GAP_NS, int(np.ceil(x * 1e9))) for x in seconds)
 
 
 #: The least time (ns) between a sample and a phase boundary: a sample closer is left out.
@@ -330,7 +381,13 @@ _SAMPLE_GAP = 1_000_000
 
 
 def _profile_times_ns(profiles: JointProfiles, sample_period: float) -> np.ndarray:
-    """Return the points' times (ns): every phase boundary and the samples apart from them."""
+    """
+    Return the points' times (ns): every phase boundary and samples apart from them.
+
+    The samples every ``sample_period`` (every few periods if one is shorter than the gap
+    between boundaries), each at least ``_SAMPLE_GAP`` (or a quarter period, if shorter) and
+    the gap from every boundary, none before the first boundary's least time.
+    """
     if not (np.isfinite(sample_period) and sample_period > 0):
         raise ValueError('sample_period must be finite and positive')
     period_ns = sample_period * 1e9
@@ -338,45 +395,18 @@ def _profile_times_ns(profiles: JointProfiles, sample_period: float) -> np.ndarr
     if end == 0:
         return np.array([max(int(round(period_ns)), 1)], dtype=np.int64)
     corners = profiles.boundaries_ns
-    grid = np.round(np.arange(1, int(end // period_ns) + 1) * period_ns).astype(np.int64)
+    stride = max(int(np.ceil(profiles.gap_ns / period_ns)), 1)
+    count = int(end // period_ns) // stride
+    grid = np.round(np.arange(1, count + 1) * stride * period_ns).astype(np.int64)
     near = np.searchsorted(corners, grid)
     gap = np.minimum(np.abs(grid - corners[np.minimum(near, corners.size - 1)]),
                      np.abs(grid - corners[np.maximum(near - 1, 0)]))
-    keep = grid[(gap >= min(_SAMPLE_GAP, period_ns / 4)) & (grid > 0) & (grid < end)]
+    least = max(min(_SAMPLE_GAP, period_ns / 4), profiles.gap_ns)
+    keep = grid[(gap >= least) & (grid >= profiles.first_ns) & (grid < end)]
     return np.union1d(keep, corners)
 
 
-#: Significant bits of a published profile position (see ``motion_trajectory``).
-_MANTISSA = 48
-
-
-def _short_mantissas(values: np.ndarray) -> np.ndarray:
-    """Return ``values`` rounded to ``_MANTISSA`` significant bits."""
+def _short_mantissas(values: np.ndarray, bits: int) -> np.ndarray:
+    """Return ``values`` rounded to ``bits`` significant bits."""
     fraction, exponent = np.frexp(values)
-    return np.ldexp(np.round(np.ldexp(fraction, _MANTISSA)), exponent - _MANTISSA)
-
-
-def _absorb_rounding(t_ns: np.ndarray, start: np.ndarray, positions: np.ndarray,
-                     states: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
-    """
-    Shift the velocities at the points by the rounding of the positions, in place.
-
-    ``states``: the profile's velocity, acceleration and jerk (T + 1, n) at t = 0 and at each
-    point, in the phase that starts there; the points' velocities are ``states[0][1:]``.
-
-    Each segment would take e / T at both its ends: e is the difference between the rounded
-    positions' step and the profile's over the segment (from its start, in the phase that
-    covers it), T its duration; its polynomial would then be the profile's plus a linear
-    term. A point between two segments takes their shifts weighted by 1 / T^2 (what it misses
-    of either costs jerk in proportion): the shorter one's, nearly. The first segment starts
-    at the state at rest, which the controller takes as it is; the last point stays at rest.
-    """
-    velocity, acceleration, jerk = states
-    span = np.diff(np.concatenate(([0], t_ns))) / 1e9                 # (T,) s
-    step, _, _ = advance(span[:, None], 0.0, velocity[:-1], acceleration[:-1], jerk[:-1])
-    previous = np.vstack((start, positions[:-1]))
-    shift = ((positions - previous) - step) / span[:, None]         # (T, n) per segment
-    weight = (1.0 / span ** 2)[:, None]
-    # point k ends segment k and starts segment k + 1 (velocity[k + 1] is point k's)
-    velocity[1:-1] += ((weight[:-1] * shift[:-1] + weight[1:] * shift[1:])
-                       / (weight[:-1] + weight[1:]))
+    return np.ldexp(np.round(np.ldexp(fraction, bits)), exponent - bits)
