@@ -1,18 +1,22 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The arm's collision model (issue 29).
+The arm's collision model.
 
-Its geometry from the URDF, the spheres that hold it, the pairs to skip, and where meshes may be
-read from.
+Its geometry from the URDF, the spheres that hold it, the pairs to skip, where meshes may be
+read from, and the convex sets (hulls, pieces, pair tables) that bound the distances below the
+triangles'.
 """
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
+from mesh_arm import write_mesh_arm
 import numpy as np
 import pytest
 from trajplan_ros.collision.arm_geometry import ArmGeometry
-from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
+from trajplan_ros.collision.convex import pair_convex_bounds
+from trajplan_ros.collision.distances import (ArmCollision, CollisionWorld, convex_hull,
+                                              HULL_SLACK)
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.collision.shapes import MeshSource
@@ -158,3 +162,132 @@ def test_meshes_over_the_limits_are_refused(tmp_path: Path,
     monkeypatch.setattr(shapes, 'MAX_MESH_VERTICES', 100)
     with pytest.raises(InvalidCollisionInput, match='vertices, over the limit'):
         MeshSource(folder=tmp_path).load('ball.stl', np.ones(3))
+
+
+def two_link_urdf(first: str, second: str) -> str:
+    """Return a URDF of two revolute joints whose links' meshes are ``first`` and ``second``."""
+    def link(name: str, uri: str) -> str:
+        return (f'<link name="{name}"><collision><geometry><mesh filename="{uri}"/></geometry>'
+                '</collision></link>')
+    joint = ('<joint name="{0}" type="revolute"><parent link="{1}"/><child link="{2}"/>'
+             '<origin xyz="0 0 {3}"/><axis xyz="0 0 1"/>'
+             '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    return ('<robot name="pybullet_style"><link name="base"/>' + link('one', first)
+            + link('two', second) + joint.format('j1', 'base', 'one', 0.1)
+            + joint.format('j2', 'one', 'two', 0.3) + '</robot>')
+
+
+def test_a_package_no_index_knows_is_read_beside_the_urdf_once_said(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    (tmp_path / 'meshes').mkdir()
+    trimesh.creation.box(extents=(0.1, 0.1, 0.2)).export(tmp_path / 'meshes' / 'one.stl')
+    trimesh.creation.icosphere(1, radius=0.05).export(tmp_path / 'two.obj')
+    urdf = tmp_path / 'arm.urdf'
+    # pybullet's layout (package://meshes/... is <folder>/meshes/...) and a package name that
+    # is only a prefix to drop (<folder>/two.obj)
+    urdf.write_text(two_link_urdf('package://meshes/one.stl', 'package://vendor_arm/two.obj'))
+    arm = ArmModel.from_urdf(urdf, 'base', 'two')
+    with caplog.at_level('WARNING', logger='trajplan_ros'):
+        geometry = ArmGeometry.from_urdf(urdf, arm, MeshSource(get_package_share_directory,
+                                                               tmp_path))
+        ArmGeometry.from_urdf(urdf, arm)                       # no package lookup at all
+    said = [r.getMessage() for r in caplog.records if 'beside the URDF' in r.getMessage()]
+    assert len(said) == 2 and 'package://meshes/, package://vendor_arm/' in said[0]
+    one, two = (link.shapes[0] for link in geometry.links)
+    assert np.ptp(one.vertices, axis=0).tolist() == pytest.approx([0.1, 0.1, 0.2])
+    assert np.max(np.linalg.norm(two.vertices, axis=1)) == pytest.approx(0.05)
+
+
+def test_a_package_read_beside_the_urdf_may_not_leave_its_folder(tmp_path: Path) -> None:
+    inside = tmp_path / 'robot'
+    (inside / 'meshes').mkdir(parents=True)
+    trimesh.creation.box().export(tmp_path / 'secret.stl')
+    (inside / 'meshes' / 'link.stl').symlink_to(tmp_path / 'secret.stl')
+    source = MeshSource(get_package_share_directory, inside)
+    for uri, reason in (('package://meshes/link.stl', 'outside'),         # a link out
+                        ('package://meshes/../../secret.stl', 'outside'),
+                        ('package://../secret.stl', 'outside'),
+                        ('package://meshes/absent.stl', 'not in the ament index, and neither')):
+        with pytest.raises(InvalidCollisionInput, match=reason):
+            source.load(uri, np.ones(3))
+    with pytest.raises(InvalidCollisionInput, match='not in the ament index'):
+        MeshSource(get_package_share_directory).load('package://meshes/x.stl', np.ones(3))
+
+
+@pytest.fixture(scope='module')
+def mesh_arm(tmp_path_factory: pytest.TempPathFactory) -> tuple[ArmModel, ArmCollision, Path]:
+    """Return the concave-mesh arm of ``mesh_arm``: its model, collision model and URDF."""
+    urdf = write_mesh_arm(tmp_path_factory.mktemp('mesh_arm'))
+    arm = ArmModel.from_urdf(urdf, 'base_link', 'tip')
+    return arm, ArmCollision.from_urdf(urdf, arm, samples=200), urdf
+
+
+def test_hull_and_piece_bounds_never_exceed_the_triangles_and_decide_alike(mesh_arm) -> None:
+    arm, model, _ = mesh_arm
+    # a ball in the ring's hole: inside the ring's hull, clear of its triangles
+    scene = Scene.from_dict({'obstacles': [
+        {'id': 'in_hole', 'type': 'sphere', 'dimensions': [0.02], 'position': [0, 0, 0.07]},
+        {'id': 'post', 'type': 'cylinder', 'dimensions': [0.4, 0.03],
+         'position': [0.15, 0.1, 0.3]},
+        {'id': 'crate', 'type': 'box', 'dimensions': [0.1, 0.1, 0.1],
+         'position': [-0.2, 0.0, 0.45]}]})
+    world = CollisionWorld(model, scene)
+    every = np.arange(len(world.pairs))
+    ring_hole = next(p for p in every if world.describe(p) == "ring with 'in_hole'")
+    nothing = (np.empty((0, 4)), np.zeros(1, dtype=np.int64))
+    for q in np.random.default_rng(5).uniform(-np.pi, np.pi, (40, arm.n_joints)):
+        poses = model.geometry.link_poses(q[None])[0]
+        exact = world.exact(poses, every)
+        hulls = pair_convex_bounds(world.convexes.arrays, poses, world.pairs,
+                                   np.full(len(every), np.inf), np.ones(len(every), bool),
+                                   *nothing)
+        assert np.all(hulls <= exact + 1e-12), float(np.max(hulls - exact))
+        for needed in (0.0, 0.01, 0.03):
+            bound, known = world.bounded(poses, every, np.full(len(every), needed))
+            assert np.all(bound <= exact + 1e-12)
+            np.testing.assert_array_equal(bound <= needed, exact <= needed)
+            np.testing.assert_allclose(bound[known], exact[known], atol=1e-12)
+            for p in every:
+                assert world.within(poses, p, needed) == (exact[p] < needed), world.describe(p)
+        # the ring's hull holds the ball, its triangles (and the hulls of their pieces) do not
+        covers = pair_convex_bounds(world.convexes.arrays, poses, world.pairs,
+                                    np.full(len(every), -np.inf), np.zeros(len(every), bool),
+                                    *nothing)
+        assert covers[ring_hole] < 0.0 < hulls[ring_hole] <= exact[ring_hole]
+
+
+def test_convex_hulls_hold_their_points_even_flat_ones() -> None:
+    rng = np.random.default_rng(3)
+    flat = np.c_[rng.uniform(size=(40, 2)), np.zeros(40)]
+    for points in (flat, flat[:, [0, 2, 1]], np.c_[rng.uniform(size=5), np.zeros((5, 2))],
+                   np.eye(3), rng.normal(size=(200, 3)),
+                   trimesh.creation.annulus(0.04, 0.06, 0.04).vertices):
+        hull = convex_hull(points)
+        normals = np.array([hull.normal(i) for i in range(hull.num_normals_and_offsets)])
+        offsets = np.array([hull.offset(i) for i in range(hull.num_normals_and_offsets)])
+        assert np.max(points @ normals.T + offsets) <= 1e-9
+    assert convex_hull(np.ones((4, 3))) is None                  # one point: no solid
+
+
+def test_a_detailed_mesh_lies_in_its_hull() -> None:
+    vertices, faces = MESHES.load('package://example-robot-data/robots/so_arm_description/'
+                                  'meshes/so101/moving_jaw_so101_v1.stl', np.ones(3))
+    hull = convex_hull(vertices)
+    normals = np.array([hull.normal(i) for i in range(hull.num_normals_and_offsets)])
+    offsets = np.array([hull.offset(i) for i in range(hull.num_normals_and_offsets)])
+    unique = np.unique(vertices, axis=0)
+    assert max(float(np.max(chunk @ normals.T + offsets))
+               for chunk in np.array_split(unique, 20)) <= HULL_SLACK
+
+
+def test_a_pair_table_bounds_its_pair_over_every_turn(mesh_arm) -> None:
+    arm, model, _ = mesh_arm
+    (table,) = model.tables                        # the bar and the jaw: the last joint apart
+    assert {model.link_names[i] for i in model.self_pairs[table.pair]} == {'bar', 'jaw'}
+    world = CollisionWorld(model)
+    for start, end in np.random.default_rng(8).uniform(-np.pi, np.pi, (30, 2)):
+        q = np.zeros((25, arm.n_joints))
+        q[:, table.joint] = np.linspace(start, end, 25)
+        least = min(world.exact(poses, np.array([table.pair]))[0]
+                    for poses in model.geometry.link_poses(q))
+        assert table.least(start, end) <= least

@@ -1,18 +1,21 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Collision-free planning (issue 29) on the paper's arm.
+Collision-free planning on the paper's arm and on an arm of concave meshes.
 
 The continuous check of a motion and the search for the fastest free joint goal, checked against
 python-fcl (``IndependentCheck``).
 """
+from mesh_arm import write_mesh_arm
 import numpy as np
 import pytest
-from trajplan_ros import paper_arm, plan, PlanStatus
+from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
 from trajplan_ros.collision.scene import Scene
+from trajplan_ros.kinematics.jit import kernels
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.free_motion import check_motion
+from trajplan_ros.planning import prepare
+from trajplan_ros.planning.free_motion import check_motion, START_TOLERANCE
 from trajplan_ros.planning.motion_profile import MotionProfile, Timing
 from trajplan_ros.planning.trajectory import motion_states
 from trajplan_ros.tools.bench.clearance import IndependentCheck
@@ -117,3 +120,33 @@ def test_a_start_within_the_padding_may_leave_but_not_come_closer(model: ArmColl
     result = plan(TARGET, seed=1, world=world_of(model, table))
     assert result.status is PlanStatus.SUCCEEDED, result.message
     assert 'starts within the padding' in result.message and "with 'table'" in result.message
+
+
+def test_a_mesh_arm_plans_around_an_obstacle_by_the_triangles_with_no_new_kernel(
+        tmp_path) -> None:
+    urdf = write_mesh_arm(tmp_path)
+    arm = ArmModel.from_urdf(urdf, 'base_link', 'tip')
+    model = ArmCollision.from_urdf(urdf, arm, samples=200)
+    start = np.zeros(arm.n_joints)
+    goal = arm.tool(np.array([[1.2, 1.0, 0.9]]))[0][0]
+    free = plan(goal, start, arm=arm, seed=4)
+    law = MotionProfile().time_law(arm, free.omega)
+    middle = motion_states(start, free.joint_goal, law, Timing.INDEPENDENT,
+                           np.array([0.5 * free.motion_time_s]))[0][0]
+    on_the_way = arm.tool(middle[None])[0][0]                        # where the tool passes
+    world = CollisionWorld(model, Scene.from_dict({'obstacles': [
+        {'id': 'table', 'type': 'box', 'dimensions': [1.5, 1.5, 0.02],
+         'position': [0.0, 0.0, -0.02]},
+        {'id': 'ball', 'type': 'sphere', 'dimensions': [0.03],
+         'position': on_the_way.tolist()}]}))
+    assert not check_motion(world, start, free.joint_goal, law, Timing.INDEPENDENT).free
+    prepare()                      # the collision check's kernels are compiled with the rest
+    before = {k: len(k.overloads) for k in kernels()}
+    result = plan(goal, start, arm=arm, seed=4, world=world)
+    assert {k: len(k.overloads) for k in kernels()} == before
+    assert result.status is PlanStatus.SUCCEEDED, result.message
+    assert result.motion_time_s >= free.motion_time_s
+    t = np.append(np.arange(0.0, result.motion_time_s, 1e-3), result.motion_time_s)
+    q = motion_states(start, result.joint_goal, law, Timing.INDEPENDENT, t)[0]
+    assert IndependentCheck(world, urdf).violations(q, START_TOLERANCE) == []
+    assert world.padding <= result.clearance_m <= IndependentCheck(world, urdf).least(q)[0]

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import functools
+import logging
 import os
 from pathlib import Path
 
@@ -32,6 +33,8 @@ from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf, to_ax
 import yourdfpy
 
 __all__ = ['ArmGeometry', 'LinkGeometry', 'poses_at']
+
+_LOG = logging.getLogger('trajplan_ros')
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +86,12 @@ class ArmGeometry:
         for k, joint in enumerate(moving):
             axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
             align[k, :3, :3] = to_axis(axis / np.linalg.norm(axis)).T
-        links = _links(robot, arm, meshes)
+        beside: set[str] = set()
+        links = _links(robot, arm, meshes, beside)
+        if beside:                                   # said once per load, not once per mesh
+            _LOG.warning('meshes of %s (no known package) read beside the URDF in %s',
+                         ', '.join(f'package://{name}/' for name in sorted(beside)),
+                         meshes.folder)
         return cls(arm, links, _reach(arm, links), align)
 
     def index(self, name: str) -> int:
@@ -152,8 +160,9 @@ def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
     return out
 
 
-def _links(robot: yourdfpy.Robot, arm: ArmModel, meshes: MeshSource) -> tuple[LinkGeometry, ...]:
-    """Return the geometry of every link below the base that has any."""
+def _links(robot: yourdfpy.Robot, arm: ArmModel, meshes: MeshSource, beside: set[str]
+           ) -> tuple[LinkGeometry, ...]:
+    """Return the geometry of every link below the base that has any (``beside``: see load)."""
     chain_index = {name: k for k, name in enumerate(arm.joint_names)}
     out = []
     for link in robot.links:
@@ -170,12 +179,12 @@ def _links(robot: yourdfpy.Robot, arm: ArmModel, meshes: MeshSource) -> tuple[Li
                 joint, attachment = chain_index[step.name], np.eye(4)
             else:
                 attachment = attachment @ origin
-        shapes = tuple(_shape(c, link.name, meshes) for c in link.collisions)
+        shapes = tuple(_shape(c, link.name, meshes, beside) for c in link.collisions)
         out.append(LinkGeometry(link.name, shapes, joint, attachment))
     return tuple(out)
 
 
-def _shape(collision, link: str, meshes: MeshSource) -> Shape:
+def _shape(collision, link: str, meshes: MeshSource, beside: set[str]) -> Shape:
     """Return one ``<collision>`` element as a Shape, in its link's frame."""
     pose = np.eye(4) if collision.origin is None else np.asarray(collision.origin, dtype=float)
     g, where = collision.geometry, f'link {link!r} collision'
@@ -188,7 +197,7 @@ def _shape(collision, link: str, meshes: MeshSource) -> Shape:
     if g.mesh is not None:
         scale = np.ones(3) if g.mesh.scale is None else np.broadcast_to(
             np.asarray(g.mesh.scale, dtype=float), (3,))
-        vertices, faces = meshes.load(g.mesh.filename, scale)
+        vertices, faces = meshes.load(g.mesh.filename, scale, beside)
         return Shape('mesh', pose, vertices=vertices, faces=faces)
     raise InvalidCollisionInput(f'{where} has no geometry')
 

@@ -14,6 +14,11 @@ only from ``package://`` URIs, through the given package lookup (ament_index in 
 the command), or beside the URDF file given to the library or the command, never from
 ``file://`` elsewhere or a URL, and refuses files over ``MAX_MESH_BYTES`` or meshes over
 ``MAX_MESH_VERTICES``. trimesh reads them.
+
+A ``package://NAME/...`` whose NAME is no known package (pybullet's ``package://meshes/...``,
+many vendors' files) is looked up beside the URDF file, as pybullet and yourdfpy do: first
+``<folder>/NAME/...``, then ``<folder>/...``; either must stay inside that folder (after
+symbolic links), like every other file read beside it.
 """
 from __future__ import annotations
 
@@ -120,16 +125,29 @@ class MeshSource:
 
     def path(self, uri: str) -> Path:
         """Return the file of a mesh URI, or refuse it with the reason."""
+        return self.locate(uri)[0]
+
+    def locate(self, uri: str) -> tuple[Path, str]:
+        """
+        Return the file of a mesh URI and the unknown package read beside the URDF ('' if none).
+
+        Refuses (``InvalidCollisionInput``) with the reason.
+        """
         if uri.startswith('package://'):
             package, _, rest = uri[len('package://'):].partition('/')
-            if self.package_share is None:
-                raise InvalidCollisionInput(f'mesh {uri!r}: no package lookup to resolve '
-                                            'package:// (is AMENT_PREFIX_PATH set?)')
-            try:
-                root = Path(self.package_share(package)).resolve()
-            except Exception:                    # ament_index raises its own lookup errors
-                raise InvalidCollisionInput(f'mesh {uri!r}: package {package!r} is not in the '
-                                            'ament index') from None
+            unknown = ('no package lookup to resolve package:// (is AMENT_PREFIX_PATH set?)'
+                       if self.package_share is None
+                       else f'package {package!r} is not in the ament index')
+            if self.package_share is not None:
+                try:
+                    root = Path(self.package_share(package)).resolve()
+                except Exception:                # ament_index raises its own lookup errors
+                    root = None
+                if root is not None:
+                    return _inside(uri, root, rest), ''
+            if self.folder is None:
+                raise InvalidCollisionInput(f'mesh {uri!r}: {unknown}')
+            return self._beside(uri, package, rest, unknown), package
         elif '://' in uri and not uri.startswith('file://'):
             raise InvalidCollisionInput(f'mesh {uri!r}: only package:// URIs and files beside '
                                         'the URDF are read')
@@ -138,14 +156,29 @@ class MeshSource:
                 raise InvalidCollisionInput(f'mesh {uri!r}: a URDF given as text reads meshes '
                                             'from package:// URIs only')
             root, rest = self.folder.resolve(), uri.removeprefix('file://')
-        path = (root / rest).resolve()
-        if not path.is_relative_to(root):
-            raise InvalidCollisionInput(f'mesh {uri!r} lies outside {root}')
-        return path
+        return _inside(uri, root, rest), ''
 
-    def load(self, uri: str, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return the vertices (scaled) and faces of the mesh at ``uri``, checked as above."""
-        path = self.path(uri)
+    def _beside(self, uri: str, package: str, rest: str, unknown: str) -> Path:
+        """Return ``<folder>/package/rest`` or else ``<folder>/rest``: the first that exists."""
+        root = self.folder.resolve()
+        tried = [_inside(uri, root, f'{package}/{rest}'), _inside(uri, root, rest)]
+        found = next((path for path in tried if path.is_file()), None)
+        if found is None:
+            raise InvalidCollisionInput(f'mesh {uri!r}: {unknown}, and neither '
+                                        f'{" nor ".join(str(p) for p in tried)} exists beside '
+                                        'the URDF')
+        return found
+
+    def load(self, uri: str, scale: np.ndarray, beside: set[str] | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Return the vertices (scaled) and faces of the mesh at ``uri``, checked as above.
+
+        ``beside``: collects the unknown packages whose meshes were read beside the URDF.
+        """
+        path, package = self.locate(uri)
+        if package and beside is not None:
+            beside.add(package)
         try:
             size = path.stat().st_size
         except OSError as exc:
@@ -160,6 +193,14 @@ class MeshSource:
         if not len(faces) or not np.all(np.isfinite(vertices)):
             raise InvalidCollisionInput(f'mesh {uri!r} has no triangles or non-finite vertices')
         return vertices * scale, faces
+
+
+def _inside(uri: str, root: Path, rest: str) -> Path:
+    """Return ``root / rest`` with its links resolved, refused if that leaves ``root``."""
+    path = (root / rest).resolve()
+    if not path.is_relative_to(root):
+        raise InvalidCollisionInput(f'mesh {uri!r} lies outside {root}')
+    return path
 
 
 @functools.lru_cache(maxsize=64)

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trajplan_ros.collision.arm_geometry import poses_at
+from trajplan_ros.collision.convex import pair_convex_bounds
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics.jit import kernel
@@ -41,7 +42,7 @@ from trajplan_ros.planning.time_law import motion_times, TimeLaw
 from trajplan_ros.planning.trajectory import motion_states
 
 __all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'project',
-           'SearchOutcome', 'START_TOLERANCE']
+           'SearchOutcome', 'START_TOLERANCE', 'StartLimits']
 
 #: Most any link point moves between two instants of the grid (m).
 GRID_SWEEP = 1e-3
@@ -49,13 +50,19 @@ GRID_SWEEP = 1e-3
 MAX_GRID = 20_000
 #: How much closer (m) a pair within the padding at the start may come: the check's resolution.
 START_TOLERANCE = 2 * GRID_SWEEP
-#: Random joint vectors the search projects onto the goal's solutions (a goal's free
-#: solutions can be few: 48 missed the fastest free one on goals of the bench).
+#: Random joint vectors the search projects onto the goal's solutions in one round (a goal's
+#: free solutions can be few, and a redundant arm's solutions many).
 SAMPLES = 192
 #: Newton steps of that projection.
 PROJECTION_STEPS = 12
 #: Bisection steps from the best free candidate towards a faster colliding one.
 BISECTIONS = 6
+#: A bisection step is checked only where it would shorten the best motion by this share.
+GAIN = 2e-3
+#: Candidate joint goals closer than this in every joint (rad) are one.
+SAME_GOAL = 1e-4
+#: Most piece pairs noted at one instant for coal to measure (more: coal measures the pairs).
+FOUND_ROWS = 4096
 
 
 @dataclass(frozen=True)
@@ -86,40 +93,63 @@ def _grid(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law: TimeL
     return t, motion_states(start, goal, law, timing, t)[0]
 
 
+@dataclass(frozen=True)
+class StartLimits:
+    """Each pair's limit (m) on motions from one start, and the pairs within the padding there."""
+
+    limit: np.ndarray
+    within: str
+
+    @classmethod
+    def at(cls, world: CollisionWorld, start: np.ndarray) -> StartLimits:
+        """Return the limits at ``start``: the padding, or a closer start's clearance less 2 mm."""
+        limit = np.full(len(world.pairs), world.padding)
+        at_start = _clearances(world, world.arm.geometry.link_poses(start[None])[0],
+                               np.arange(len(world.pairs)))
+        close = np.flatnonzero(at_start <= world.padding)
+        limit[close] = at_start[close] - START_TOLERANCE
+        return cls(limit, ', '.join(world.describe(p) for p in close))
+
+
 def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law: TimeLaw,
-                 timing: Timing, exact_clearance: bool = False) -> Clearance:
+                 timing: Timing, exact_clearance: bool = False,
+                 limits: StartLimits | None = None) -> Clearance:
     """
     Return whether the motion from ``start`` to ``goal`` keeps every pair clear (see above).
 
-    ``exact_clearance``: the least clearance is computed exactly (coal) for every pair the
-    spheres bring near; otherwise a pair decided on the spheres reports their bound.
+    ``exact_clearance``: the least clearance is computed on coal's hulls for every pair the
+    spheres bring near (a bound never above the true one, and exact where it is within the
+    limit); otherwise a pair decided on the spheres reports their bound. ``limits``: the
+    pairs' limits from ``start`` (``StartLimits.at``), when known already.
     """
     if not len(world.pairs):
         return Clearance(True, float('inf'), '', 0.0)
-    end = world.arm.geometry.link_poses(goal[None])[0]
-    everything = np.arange(len(world.pairs))
+    limits = StartLimits.at(world, start) if limits is None else limits
+    limit, within = limits.limit, limits.within
     t, q = _grid(world, start, goal, law, timing)
-    limit = np.full(len(world.pairs), world.padding)
-    at_start = _clearances(world, world.arm.geometry.link_poses(q[:1])[0], everything)
-    close = np.flatnonzero(at_start <= world.padding)
-    limit[close] = at_start[close] - START_TOLERANCE
-    within = ', '.join(world.describe(p) for p in close)
-    blocked = _blocked_at(world, end, limit)
+    due = np.zeros(len(world.pairs), dtype=np.int64)
+    least = np.array([np.inf, -1.0, 0.0])                  # clearance, pair, instant
+    _clear_by_tables(world, q, limit, due, least)
+    end = world.arm.geometry.link_poses(goal[None])[0]
+    blocked = _blocked_at(world, end, np.where(due < len(t), limit, -np.inf))
     if blocked is not None:                          # most colliding candidates end in it
         return Clearance(False, world.padding, world.describe(blocked), float(t[-1]), within)
     moved = np.ascontiguousarray(np.abs(q - start) @ world.sweep.T)     # b_p(t), (M, P)
-    due = np.zeros(len(world.pairs), dtype=np.int64)
-    least = np.array([np.inf, -1.0, 0.0])                  # clearance, pair, instant
-    margin = world.padding if exact_clearance else -np.inf
+    margin = 0.0 if exact_clearance else -np.inf
     chain, spheres = world.arm.geometry.kernel_arrays, world.bound_arrays
-    k = 0
+    convexes = world.convexes.arrays
+    k = int(due.min())
     while k < len(t):
-        k, which, value, step, near, poses = sphere_pass(chain, spheres, world.pairs, q, moved,
-                                                         limit, due, k, margin, least)
+        k, which, value, step, near, poses, rows, complete = check_pass(
+            chain, spheres, convexes, world.pairs, q, moved, limit, due, k, margin, least)
         if k == len(t):
             break
-        value[near] = world.exact(poses, which[near])
-        bad = np.flatnonzero(value <= limit[which] + step)
+        needed = limit[which] + step
+        for n in np.flatnonzero(near):
+            value[n] = (world.decide(poses, which[n], rows[rows[:, 0] == n], needed[n])
+                        if complete else world.bounded(poses, which[n:n + 1], needed[n:n + 1],
+                                                       exact_clearance, True)[0][0])
+        bad = np.flatnonzero(value <= needed)
         if bad.size:
             p = which[bad[0]]
             return Clearance(False, float(value[bad[0]]), world.describe(p), float(t[k]), within)
@@ -129,38 +159,83 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
                      within)
 
 
-@kernel
-def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
-                moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
-                least: np.ndarray) -> tuple:
+def _clear_by_tables(world: CollisionWorld, q: np.ndarray, limit: np.ndarray, due: np.ndarray,
+                     least: np.ndarray) -> None:
     """
-    Go on with the check from instant k while the spheres decide every pair due.
+    Leave out of the check the pairs whose table (``PairTable``) keeps them over their limit.
+
+    Their table bounds them over the whole turn of their joint from q[0] to q[-1], not only
+    at the grid's instants; such a bound also stands for their least clearance.
+    """
+    for table in world.arm.tables:
+        turn = q[:, table.joint]
+        bound = table.least(turn[0], turn[-1])
+        if bound > limit[table.pair]:
+            due[table.pair] = len(q)
+            if bound < least[0]:
+                least[:] = bound, table.pair, np.argmin(np.abs(turn - table.lowest(turn[0],
+                                                                                   turn[-1])))
+
+
+@kernel
+def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray, q: np.ndarray,
+               moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
+               least: np.ndarray) -> tuple:
+    """
+    Go on with the check from instant k while the spheres and hulls decide every pair due.
 
     At each instant the pairs due (``due`` <= k) get their sphere bounds at the link poses
-    (``poses_at`` of ``chain``, ``pair_lower_bounds`` of ``spheres``). While none comes within a
-    grid step of its limit (nor, with a finite ``margin``, below the least clearance so far or
-    within ``margin`` of this instant's least) they are settled (``settle``) and the check moves
-    on to the next instant due. Returns that instant (len(q): every instant is checked), the
-    pairs due there, their bounds, how far each may come closer by the next instant, which of
-    them coal must decide, and the link poses.
+    (``poses_at`` of ``chain``, ``pair_lower_bounds`` of ``spheres``); a pair whose spheres
+    come within a grid step of its limit (or, with a finite ``margin``, below the least
+    clearance so far or within ``margin`` of this instant's least) gets the larger bound of
+    its convex sets (``convex.body_bound``: the link's hull, then its shapes'; for a possible
+    least, the shapes' always). While none comes within a grid step of its limit they are
+    settled (``settle``) and the check moves on to the next instant due. Returns that instant
+    (len(q): every instant is checked), the pairs due there, their bounds, how far each may come
+    closer by the next instant, which of them coal must decide (the triangles), and the link
+    poses. Without convex sets (none given) the spheres alone bound them.
     """
     centres, radii, first, kinds, dims, inverse = spheres
     last = len(q) - 1
+    found, count = np.empty((FOUND_ROWS, 4)), np.zeros(1, np.int64)
     while k <= last:
         which = np.flatnonzero(due <= k)
         poses = poses_at(*chain, q[k])
         value = pair_lower_bounds(poses, centres, radii, first, pairs[which], kinds, dims,
                                   inverse)
         step = moved[min(k + 1, last)][which] - moved[k][which]
-        near = value - limit[which] <= step             # the spheres leave less than a step
-        near |= value < min(least[0], np.min(value) + margin)      # may be the least clearance
+        need = limit[which] + step
+        least_may = value < least[0] + margin                    # may be the least
+        asked = np.flatnonzero((value <= need) | least_may)
+        count[0] = 0
+        if len(asked) and len(convexes[8]):
+            value[asked] = np.maximum(value[asked], pair_convex_bounds(
+                convexes, poses, pairs[which[asked]], need[asked], least_may[asked], found,
+                count))
+        near = value <= need
         if near.any():
-            return k, which, value, step, near, poses
+            rows = found[:min(count[0], len(found))].copy()
+            for r in range(len(rows)):
+                rows[r, 0] = asked[int(rows[r, 0])]
+            return k, which, value, step, near, poses, rows, count[0] <= len(found)
         settle(moved, which, k, value, limit, due, least)
         k = np.min(due)
     nothing = np.empty(0)
     return (len(q), np.empty(0, np.int64), nothing, nothing, np.empty(0, np.bool_),
-            np.empty((0, 4, 4)))
+            np.empty((0, 4, 4)), np.empty((0, 4)), True)
+
+
+@kernel
+def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
+                moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
+                least: np.ndarray) -> tuple:
+    """``check_pass`` on the spheres alone (also compiles it for the convex sets' types)."""
+    nothing = (np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4, 4)),
+               np.zeros(1, np.int64), np.zeros((0, 3)), np.zeros(1, np.int64),
+               np.zeros(0, np.int64), np.zeros(0, np.bool_), np.zeros(0, np.int64),
+               np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64),
+               np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0))
+    return check_pass(chain, spheres, nothing, pairs, q, moved, limit, due, k, margin, least)
 
 
 @kernel
@@ -201,20 +276,35 @@ def next_checks(moved: np.ndarray, which: np.ndarray, k: int, slack: np.ndarray)
 
 
 def _blocked_at(world: CollisionWorld, poses: np.ndarray, limit: np.ndarray) -> int | None:
-    """Return a pair within its limit at link poses (exact where the spheres come near)."""
-    bounds = world.lower_bounds(poses, np.arange(len(world.pairs)))
-    for p in np.flatnonzero(bounds <= limit):
-        if world.within(poses, p, limit[p]):
-            return int(p)
+    """
+    Return a pair within its limit at link poses, or None.
+
+    The spheres, then the convex sets (``pair_convex_bounds``) pass most pairs; coal measures
+    the pieces they leave open (``CollisionWorld.decide``), the deepest first.
+    """
+    near = np.flatnonzero(world.lower_bounds(poses, np.arange(len(world.pairs))) <= limit)
+    found, count = np.empty((FOUND_ROWS, 4)), np.zeros(1, dtype=np.int64)
+    bounds = pair_convex_bounds(world.convexes.arrays, poses, world.pairs[near], limit[near],
+                                np.zeros(len(near), dtype=np.bool_), found, count)
+    rows = found[:min(count[0], FOUND_ROWS)]
+    for n in np.flatnonzero(bounds <= limit[near])[np.argsort((bounds - limit[near])[
+            bounds <= limit[near]], kind='stable')]:
+        p = int(near[n])
+        if count[0] <= FOUND_ROWS:
+            value = world.decide(poses, p, rows[rows[:, 0] == n], float(limit[p]))
+        else:
+            value = world.bounded(poses, near[n:n + 1], limit[p:p + 1], decide=True)[0][0]
+        if value <= limit[p]:
+            return p
     return None
 
 
 def _clearances(world: CollisionWorld, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
-    """Return the pairs' sphere bounds, made exact where they fall within the padding."""
+    """Return lower bounds of the pairs' distances, exact where they fall within the padding."""
     out = world.lower_bounds(poses, which)
     near = np.flatnonzero(out <= world.padding)
     if near.size:
-        out[near] = world.exact(poses, which[near])
+        out[near] = world.bounded(poses, which[near], np.full(near.size, world.padding))[0]
     return out
 
 
@@ -236,11 +326,18 @@ def project(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STEPS) -> np.
 
 
 def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
-    """Return reached joint goals, fastest first: random ones projected, and those polished."""
+    """
+    Return reached joint goals, fastest first: random ones projected, and those polished.
+
+    Polished copies often end at one local minimum: of goals within ``SAME_GOAL`` (rad) of each
+    other in every joint only the fastest is kept (their motions are the same to the check).
+    """
     projected = project(obj, rng.uniform(obj.lower, obj.upper, (SAMPLES, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(*obj.tool(x)) <= tolerance]
-    return x[np.argsort(obj.motion_time(x), kind='stable')]
+    x = x[np.argsort(obj.motion_time(x), kind='stable')]
+    _, first = np.unique(np.round(x / SAME_GOAL), axis=0, return_index=True)
+    return x[np.sort(first)]
 
 
 def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
@@ -252,40 +349,91 @@ def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing:
     ``x0``: the optimiser's answer (planned joints), checked first; ``law``: the whole arm's
     time law; ``tolerance``: the largest error (m) of a reached goal.
     """
-    def check(x: np.ndarray, exact: bool = False) -> Clearance:
-        return check_motion(world, obj.start, obj.full(x)[0], law, timing, exact)
+    limits = StartLimits.at(world, obj.start)
 
-    first = check(x0, True)
+    def check(x: np.ndarray) -> Clearance:
+        return check_motion(world, obj.start, obj.full(x)[0], law, timing, True, limits)
+
+    first = check(x0)
     if first.free:
         return SearchOutcome(x0, first, 1)
     checked, colliding, best = 1, [x0], None
-    for x in _candidates(obj, rng, tolerance):
-        checked += 1
-        if check(x).free:
-            best = x
+    for _ in range(_rounds(obj)):
+        found, spent = _first_free(obj, check, _candidates(obj, rng, tolerance), best, colliding)
+        checked += spent
+        if found is None and best is not None:
             break
-        colliding.append(x)
+        best = found or best
     if best is None:
         return SearchOutcome(None, first, checked)
+    colliding.sort(key=lambda x: _time(obj, x))
     for target in colliding[:3]:
         best, spent = _bisect(obj, check, best, target, tolerance)
         checked += spent
-    return SearchOutcome(best, check(best, True), checked)
+    return SearchOutcome(best[0], best[1], checked)
 
 
-def _bisect(obj: Objective, check, free: np.ndarray, blocked: np.ndarray,
-            tolerance: float) -> tuple[np.ndarray, int]:
-    """Return the fastest free point found between ``free`` and ``blocked`` on the solutions."""
-    low, high, best = 0.0, 1.0, free
-    best_time = float(obj.motion_time(free[None])[0])
+def _rounds(obj: Objective) -> int:
+    """
+    Return the most rounds of candidates: one per free direction of the solutions past two.
+
+    ``SAMPLES`` vectors cover a solution set of two dimensions (a 5-joint arm's positions);
+    each further dimension gets a round more. A round follows only while the last one found a
+    faster free motion, or none has been found yet.
+    """
+    return max(1, obj.null_directions - 1)
+
+
+def _first_free(obj: Objective, check, candidates: np.ndarray,
+                best: tuple[np.ndarray, Clearance] | None, colliding: list[np.ndarray]
+                ) -> tuple[tuple[np.ndarray, Clearance] | None, int]:
+    """
+    Return the first free motion among candidates (fastest first) faster than ``best``.
+
+    Only candidates that would shorten ``best`` by ``GAIN`` are checked; the colliding ones
+    are added to ``colliding``. Also returns the motions checked.
+    """
+    if best is not None:
+        candidates = candidates[obj.motion_time(candidates) < (1.0 - GAIN) * _time(obj, best[0])]
+    for n, x in enumerate(candidates):
+        clearance = check(x)
+        if clearance.free:
+            return (x, clearance), n + 1
+        colliding.append(x)
+    return None, len(candidates)
+
+
+def _time(obj: Objective, x: np.ndarray) -> float:
+    """Return the motion time to joint goal x (planned joints)."""
+    return float(obj.motion_time(x[None])[0])
+
+
+def _bisect(obj: Objective, check, free: tuple[np.ndarray, Clearance], blocked: np.ndarray,
+            tolerance: float) -> tuple[tuple[np.ndarray, Clearance], int]:
+    """
+    Return the fastest free point found between ``free`` and ``blocked`` on the solutions.
+
+    Each step takes the (projected) middle of what is left: checked, it moves the search
+    towards ``blocked`` where free and away where not; a middle that would not shorten the best
+    motion by ``GAIN`` is not checked (the search moves on towards ``blocked``). The search
+    ends once the nearest blocked point is no faster than that. Also returns the motions
+    checked.
+    """
+    low, high, best, spent = 0.0, 1.0, free, 0
+    best_time, high_time = _time(obj, free[0]), _time(obj, blocked)
     for _ in range(BISECTIONS):
+        if high_time > (1.0 - GAIN) * best_time:
+            break
         middle = 0.5 * (low + high)
-        x = project(obj, ((1.0 - middle) * free + middle * blocked)[None])
-        reached = obj.errors(*obj.tool(x))[0] <= tolerance
-        if reached and check(x[0]).free:
+        x = project(obj, ((1.0 - middle) * free[0] + middle * blocked)[None])[0]
+        if _time(obj, x) > (1.0 - GAIN) * best_time:
             low = middle
-            if obj.motion_time(x)[0] < best_time:
-                best, best_time = x[0], float(obj.motion_time(x)[0])
+            continue
+        clearance = check(x) if obj.errors(*obj.tool(x[None]))[0] <= tolerance else None
+        spent += clearance is not None
+        if clearance is not None and clearance.free:
+            low = middle
+            best, best_time = (x, clearance), _time(obj, x)
         else:
-            high = middle
-    return best, BISECTIONS
+            high, high_time = middle, _time(obj, x)
+    return best, spent

@@ -3,11 +3,12 @@
 """
 The ``trajplan bench-collisions`` subcommand: the targets of issue 29, measured.
 
-For each arm (the SO-101, UR5 and Panda of example-robot-data, and the paper's arm) it draws
-scenes with a fresh seed: a table under the base and 1 to 10 boxes, spheres and cylinders
-around the arm, none within the padding of the arm at its start, and goals (the tool point of
-random joint angles, outside every obstacle). Each goal is planned three ways: without any
-check (the plan of before issue 29), with the arm's own links only, and with the scene. Then:
+For each arm (the SO-101, UR5, xArm7 and Panda of example-robot-data, and the paper's arm) it
+draws scenes with a fresh seed: a table under the base and 1 to ``--obstacles`` boxes, spheres
+and cylinders around the arm, none within the padding of the arm at its start, and goals (the
+tool point of random joint angles, outside every obstacle). Each goal is planned three ways:
+without any check (the plan of before issue 29), with the arm's own links only, and with the
+scene. Then:
 
 * never a collision: every plan that succeeds is sampled every millisecond and checked by
   python-fcl on the real shapes (``clearance.IndependentCheck``), which must find every pair
@@ -15,14 +16,17 @@ check (the plan of before issue 29), with the arm's own links only, and with the
 * not needlessly refused: a brute-force search, ``--brute`` joint solutions of the goal (random
   joint vectors projected onto it and polished), each motion checked exactly in order of its
   motion time, gives the fastest free motion it finds; the planner must plan 99 % of the goals
-  where it finds one, within 1 % of its motion time;
-* speed: the median plan time with the scene against the same arm's without any check, and the
-  check of the arm's own links alone against no check.
+  where it finds one, within 1 % of its motion time, and end none of them ``not_reached``;
+* speed: the plan time's median, 90th and 99th percentile with the scene and without any check,
+  the median with the arm's own links alone, and the ratios of the medians.
+
+``--rows FILE`` also writes every goal's measurements, one JSON object a line.
 """
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+import json
 from pathlib import Path
 import sys
 import tempfile
@@ -34,7 +38,8 @@ from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.free_motion import check_motion, project, START_TOLERANCE
+from trajplan_ros.planning.free_motion import (check_motion, project, START_TOLERANCE,
+                                               StartLimits)
 from trajplan_ros.planning.motion_profile import MotionProfile, Timing
 from trajplan_ros.planning.objective import Objective
 from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
@@ -51,6 +56,7 @@ STARTS = {'so101': ((0.0, 0.0, 0.0, 0.0, 0.0), None),
           'ur5': ((0.0, -1.57, 1.57, -1.57, -1.57, 0.0), 'ur_description/srdf/ur5.srdf'),
           'panda': ((0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785),
                     'panda_description/srdf/panda.srdf'),
+          'xarm7': ((0.0,) * 7, 'xarm_description/srdf/xarm7.srdf'),
           'paper': ((0.0,) * 5, None)}
 
 
@@ -100,8 +106,9 @@ def _obstacle(rng: np.random.Generator, index: int, reach: float) -> Obstacle:
     return Obstacle(f'{kind}{index}', Shape.primitive(kind, dims, pose, 'bench'))
 
 
-def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float) -> CollisionWorld:
-    """Return a table under the base and 1 to 10 obstacles clear of the arm at its start."""
+def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float, most: int = 10
+               ) -> CollisionWorld:
+    """Return a table under the base and 1 to ``most`` obstacles clear of the arm's start."""
     reach = bench.arm.reach
     base = [link for link in bench.model.geometry.links if link.joint < 0]
     heights = (link.vertices() @ link.attachment[2, :3] + link.attachment[2, 3] for link in base)
@@ -110,7 +117,7 @@ def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float) -> Col
     table[2, 3] = min(bottom, 0.0) - 0.001 - 0.02            # its top just under the base
     obstacles = [Obstacle('table', Shape.primitive('box', (2 * reach, 2 * reach, 0.04), table,
                                                    'bench'))]
-    wanted = int(rng.integers(1, 11))
+    wanted = int(rng.integers(1, most + 1))
     poses = bench.model.geometry.link_poses(bench.start[None])[0]
     while len(obstacles) < wanted + 1:
         candidate = _obstacle(rng, len(obstacles), reach)
@@ -140,9 +147,10 @@ def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega
     projected = project(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(*obj.tool(x)) <= 1e-6]
+    limits = StartLimits.at(world, bench.start)
     for candidate in x[np.argsort(obj.motion_time(x), kind='stable')]:
-        if check_motion(world, bench.start, obj.full(candidate)[0], law,
-                        Timing.INDEPENDENT).free:
+        if check_motion(world, bench.start, obj.full(candidate)[0], law, Timing.INDEPENDENT,
+                        limits=limits).free:
             return float(obj.motion_time(candidate[None])[0])
     return None
 
@@ -152,6 +160,9 @@ class Row:
     """One goal's measurements."""
 
     arm: str
+    scene: int
+    seed: int
+    goal: list[float]
     obstacles: int
     status: str
     motion_time: float
@@ -169,8 +180,8 @@ def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
     return motion_states(result.start, result.joint_goal, law, Timing.INDEPENDENT, t)[0]
 
 
-def _measure(bench: BenchArm, world: CollisionWorld, goal: np.ndarray,
-             args: argparse.Namespace, seed: int) -> Row:
+def _measure(bench: BenchArm, world: CollisionWorld, check: IndependentCheck, goal: np.ndarray,
+             args: argparse.Namespace, seed: int, scene: int) -> Row:
     """Plan one goal three ways, check the plan independently, and search by brute force."""
     settings = {'start': bench.start, 'arm': bench.arm, 'seed': seed, 'omega': args.omega}
     none = plan(goal, **settings)
@@ -178,18 +189,25 @@ def _measure(bench: BenchArm, world: CollisionWorld, goal: np.ndarray,
     result = plan(goal, world=world, **settings)
     broken = []
     if result.success:
-        broken = IndependentCheck(world, bench.urdf).violations(
-            _sampled(bench, result, args.omega), START_TOLERANCE)
+        broken = check.violations(_sampled(bench, result, args.omega), START_TOLERANCE)
     brute = _brute_force(bench, world, goal, args.omega, args.brute) if none.success else None
-    return Row(bench.name, len(world.scene.obstacles) - 1, result.status.value,
+    return Row(bench.name, scene, seed, goal.tolist(), len(world.scene.obstacles) - 1,
+               result.status.value,
                result.motion_time_s, brute, result.plan_time_s, own.plan_time_s,
                none.plan_time_s, broken)
 
 
+def _percentiles(values: list[float]) -> str:
+    """Return the median, 90th and 99th percentile of times (s) in ms, as 'a / b / c'."""
+    return ' / '.join(f'{1e3 * v:.1f}' for v in np.percentile(values, (50, 90, 99)))
+
+
 def _report(rows: list[Row]) -> str:
-    """Return the table of the targets per arm."""
-    lines = ['arm      goals  planned  collisions  brute-free  planned of those  within 1 %  '
-             'median ms: none / self / scene  self/none  scene/none']
+    """Return the tables of the targets per arm: answers, then plan times."""
+    answers = ['arm      goals  planned  collisions  brute-free  planned of those  within 1 %  '
+               'not_reached while free']
+    times = ['arm      plan ms none: median / p90 / p99   self: median   '
+             'scene: median / p90 / p99   self/none  scene/none']
     for name in dict.fromkeys(r.arm for r in rows):
         mine = [r for r in rows if r.arm == name]
         planned = [r for r in mine if r.status == PlanStatus.SUCCEEDED.value]
@@ -197,13 +215,16 @@ def _report(rows: list[Row]) -> str:
         free = [r for r in mine if r.brute is not None]
         kept = [r for r in free if r.status == PlanStatus.SUCCEEDED.value]
         close = [r for r in kept if r.motion_time <= 1.01 * r.brute + 1e-9]
-        none, own, scene = (1e3 * np.median([getattr(r, k) for r in mine])
+        missed = [r for r in free if r.status == PlanStatus.NOT_REACHED.value]
+        answers.append(f'{name:8} {len(mine):5}  {len(planned):7}  {len(hits):10}  '
+                       f'{len(free):10}  {len(kept):16}  {len(close):10}  {len(missed):22}')
+        answers += [f'    collision: {", ".join(r.broken)}' for r in hits]
+        none, own, scene = ([getattr(r, k) for r in mine]
                             for k in ('time_none', 'time_self', 'time_scene'))
-        lines.append(f'{name:8} {len(mine):5}  {len(planned):7}  {len(hits):10}  {len(free):10}'
-                     f'  {len(kept):16}  {len(close):10}  {none:9.1f} / {own:5.1f} / '
-                     f'{scene:6.1f}  {own / none:9.2f}  {scene / none:10.2f}')
-        lines += [f'    collision: {", ".join(r.broken)}' for r in hits]
-    return '\n'.join(lines)
+        times.append(f'{name:8} {_percentiles(none):>33}   {1e3 * np.median(own):12.1f}   '
+                     f'{_percentiles(scene):>25}   {np.median(own) / np.median(none):9.2f}  '
+                     f'{np.median(scene) / np.median(none):10.2f}')
+    return '\n'.join(answers + [''] + times)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -218,6 +239,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help='joint solutions of the brute-force search per goal')
     p.add_argument('--omega', type=float, default=1.0, help='angular velocity, rad/s')
     p.add_argument('--padding', type=float, default=DEFAULT_PADDING)
+    p.add_argument('--obstacles', type=positive_count, default=10,
+                   help='most obstacles per scene besides the table')
+    p.add_argument('--rows', type=Path, default=None,
+                   help="write every goal's measurements to this file (JSON lines)")
     p.add_argument('--seed', type=int, default=None, help='default: a fresh one, printed')
     p.set_defaults(run=run)
 
@@ -225,8 +250,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the bench and print its table."""
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
-    print(f'bench-collisions --seed {seed} --scenes {args.scenes} --goals {args.goals} '
-          f'--brute {args.brute} --omega {args.omega} --padding {args.padding}', flush=True)
+    print(f'bench-collisions --arms {" ".join(args.arms)} --seed {seed} --scenes '
+          f'{args.scenes} --goals {args.goals} --brute {args.brute} --omega {args.omega} '
+          f'--padding {args.padding} --obstacles {args.obstacles}', flush=True)
     prepare()
     rng = np.random.default_rng(seed)
     rows = []
@@ -237,10 +263,14 @@ def run(args: argparse.Namespace) -> int:
             print(f'{name}: collision model in {time.perf_counter() - clock:.1f} s '
                   f'({bench.model.skip_source})', file=sys.stderr, flush=True)
             for scene in range(args.scenes):
-                world = draw_scene(bench, rng, args.padding)
+                world = draw_scene(bench, rng, args.padding, args.obstacles)
+                check = IndependentCheck(world, bench.urdf)
                 for _ in range(args.goals):
-                    rows.append(_measure(bench, world, _goal(bench, world, rng), args,
-                                         int(rng.integers(2**31))))
+                    rows.append(_measure(bench, world, check, _goal(bench, world, rng), args,
+                                         int(rng.integers(2**31)), scene))
+                    if args.rows is not None:
+                        with args.rows.open('a', encoding='utf-8') as out:
+                            out.write(json.dumps(asdict(rows[-1])) + '\n')
                 print(f'{name}: scene {scene + 1}/{args.scenes}', file=sys.stderr, flush=True)
     print(_report(rows))
     return 0
