@@ -20,10 +20,11 @@ setup(
     python_requires='>=3.10',
     # yourdfpy parses URDF (without meshes) after defusedxml has refused DTDs and entities;
     # numba compiles the planning kernels (0.62: the first with the cache locators jit.py uses,
-    # and the version the test extra pins, so that the tests run at this floor); PyYAML reads
+    # and the version the test extra pins, so that the tests run at this floor; below 0.69: the
+    # newest tested, as jit.py uses numba's private caching classes); PyYAML reads
     # MoveIt's joint_limits.yaml; trimesh reads collision meshes and coal (FCL's maintained
     # successor, also the ROS package coal) computes exact distances
-    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.62',
+    install_requires=['setuptools', 'numpy>=1.23', 'yourdfpy', 'defusedxml', 'numba>=0.62,<0.69',
                       'pyyaml', 'trimesh', 'coal'],
     extras_require={
         # The ROS 2 Jazzy runtime from PyPI, for machines without an apt/rosdep installation.

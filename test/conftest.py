@@ -1,7 +1,7 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Shared fixtures for the ROS 2 integration tests (test_node*.py).
+Shared fixtures: the run's kernel cache, the colcon install, the node and a DDS peer.
 
 Importing this file needs no ROS 2: rclpy and the interface packages are imported inside the
 fixtures, so the core's tests run where ROS 2 is absent. The ROS tests themselves import rclpy
@@ -25,25 +25,13 @@ _KERNEL_CACHE = None
 if 'NUMBA_CACHE_DIR' not in os.environ:
     _KERNEL_CACHE = os.environ['NUMBA_CACHE_DIR'] = tempfile.mkdtemp(prefix='trajplan-kernels-')
 
-from dataclasses import dataclass  # noqa: E402, I100 (after the cache folder is set)
-from pathlib import Path  # noqa: E402
-import re  # noqa: E402
-import signal  # noqa: E402
+from pathlib import Path  # noqa: E402, I100 (after the cache folder is set)
 import subprocess  # noqa: E402
 import sys  # noqa: E402
-from typing import Any, Callable, Iterator, Mapping  # noqa: E402
+from typing import Any, Callable, Iterator  # noqa: E402
 
+from node_under_test import Install, NodeProcess, PACKAGE, REPO  # noqa: E402
 import pytest  # noqa: E402
-from trajplan_ros.tools.node_process import (PlannerProcess, TIMEOUT_S,  # noqa: E402
-                                             wait_until)
-
-
-REPO = Path(__file__).resolve().parents[1]
-PACKAGE = 'trajplan_ros'
-#: Liveness bound for anything the tests wait on (discovery, a plan, a build step).
-LIVENESS_S = TIMEOUT_S
-
-__all__ = ['LIVENESS_S', 'Install', 'NodeProcess', 'wait_until']
 
 
 #: The test of a cold start, run first so that its compile fills the run's cache (test_kernels).
@@ -81,27 +69,6 @@ def ros_env() -> Iterator[dict[str, str]]:
     patch.undo()
 
 
-@dataclass(frozen=True)
-class Install:
-    """A colcon install of the package (isolated layout: one prefix per package)."""
-
-    prefix: Path
-
-    @property
-    def executable(self) -> Path:
-        return self.prefix / 'lib' / PACKAGE / 'planner_node'
-
-    def env(self, base: Mapping[str, str]) -> dict[str, str]:
-        """Return ``base`` plus what ``source install/setup.bash`` adds (venv as underlay)."""
-        python = f'python{sys.version_info.major}.{sys.version_info.minor}'
-        site = self.prefix / 'lib' / python / 'site-packages'
-        env = dict(base)
-        env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(site), base.get('PYTHONPATH')]))
-        env['AMENT_PREFIX_PATH'] = os.pathsep.join([str(self.prefix), sys.prefix])
-        env['PYTHONUNBUFFERED'] = '1'
-        return env
-
-
 @pytest.fixture(scope='session')
 def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, str]) -> Install:
     """``colcon build`` of this repository into a temporary directory, once per session."""
@@ -115,41 +82,6 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
 
 
 # --- the node process ---------------------------------------------------------------------------
-
-class NodeProcess(PlannerProcess):
-    """A planner_node subprocess (``trajplan_ros.tools.demo.PlannerProcess``) with test helpers."""
-
-    def __init__(self, argv: list[str], env: Mapping[str, str]) -> None:
-        super().__init__(env=env, argv=argv)
-
-    @property
-    def output(self) -> str:
-        with self._cond:
-            return '\n'.join(self.lines)
-
-    def mark(self) -> int:
-        """Return a position in the output; ``wait_for(..., after=mark)`` looks after it."""
-        with self._cond:
-            return len(self.lines)
-
-    def has(self, pattern: str, after: int = 0) -> bool:
-        """Whether a line at or after ``after`` matches ``pattern`` (a regex) by now."""
-        regex = re.compile(pattern)
-        with self._cond:
-            return any(regex.search(line) for line in self.lines[after:])
-
-    def wait_for(self, pattern: str, after: int = 0, timeout: float = LIVENESS_S) -> re.Match[str]:
-        """Return the first line at or after ``after`` matching ``pattern`` (a regex), or fail."""
-        found = super().wait_for(pattern, timeout, after)
-        if found is None:
-            state = 'exited' if self.proc.poll() is not None else 'still running'
-            pytest.fail(f'no line matching {pattern!r} within {timeout:.0f} s (node {state}); '
-                        'output:\n' + '\n'.join(self.lines[-40:]))
-        return found
-
-    def stop(self, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
-        return super().stop(sig, timeout)
-
 
 @pytest.fixture(scope='session')
 def start_node(colcon_install: Install,

@@ -32,10 +32,10 @@ sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve
 
 from controller_limits import controller_peaks, peaks, random_law, random_move  # noqa: E402
 import numpy as np  # noqa: E402
-from test_profile_trajectory import arm_of, check_under_the_controller, profiles  # noqa: E402
+from profile_cases import arm_of, check_under_the_controller, profiles  # noqa: E402
 from trajplan_ros import paper_arm, plan  # noqa: E402
-from trajplan_ros.planning.motion_profile import Timing  # noqa: E402
-from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TRAPEZOIDAL  # noqa: E402
+from trajplan_ros.motion.motion_profile import Timing  # noqa: E402
+from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TRAPEZOIDAL  # noqa: E402
 
 LAWS = {'servo': SERVO, 'trapezoidal': TRAPEZOIDAL, 'jerk_limited': JERK_LIMITED}
 

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.time_law import JERK_LIMITED, motion_times, SERVO, TimeLaw
-from trajplan_ros.planning.trajectory import motion_trajectory, Trajectory
+from trajplan_ros.motion.motion_profile import Timing
+from trajplan_ros.motion.time_law import JERK_LIMITED, motion_times, SERVO, TimeLaw
+from trajplan_ros.motion.trajectory import motion_trajectory, Trajectory
 
 __all__ = ['LIMIT_DECADES', 'Peaks', 'controller_peaks', 'random_law', 'random_move']
 

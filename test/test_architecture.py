@@ -3,10 +3,10 @@
 """
 The package's architecture, checked on its source: layers, imports, function size, headers.
 
-The folders are layers: ``kinematics`` < ``collision`` < ``planning`` < ``ros`` and ``tools``.
-A module may
-import from its own layer and the layers below it, never above, and the import graph between
-our modules has no cycles. None of ``kinematics``, ``collision`` and ``planning`` may import ROS.
+The folders are layers: ``kinematics`` < ``motion`` < ``collision`` < ``search`` < ``planning``
+< ``ros`` and ``tools``. A module may import from its own layer and the layers below it, never
+above, and the import graph between our modules has no cycles. Nothing below ``ros`` may import
+ROS.
 """
 import ast
 from pathlib import Path
@@ -19,14 +19,18 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
 #: What each layer may import from this package (besides itself).
 ALLOWED = {
     'kinematics': set(),
-    'collision': {'kinematics'},
-    'planning': {'kinematics', 'collision'},
-    'ros': {'kinematics', 'collision', 'planning'},
-    'tools': {'kinematics', 'collision', 'planning', 'ros'},   # clients share the node's ways
+    'motion': {'kinematics'},
+    'collision': {'kinematics', 'motion'},
+    'search': {'kinematics', 'motion', 'collision'},
+    'planning': {'kinematics', 'motion', 'collision', 'search'},
+    'ros': {'kinematics', 'motion', 'collision', 'search', 'planning'},
+    'tools': {'kinematics', 'motion', 'collision', 'search', 'planning', 'ros'},
 }
 #: Top-level names of ROS 2 Python packages: none may appear in the numpy core.
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'geometry_msgs', 'nav_msgs', 'sensor_msgs',
                 'std_msgs', 'trajectory_msgs', 'builtin_interfaces', 'ament_index_python'}
+#: The layers below ``ros``: the library, importable without ROS.
+CORE = {'kinematics', 'motion', 'collision', 'search', 'planning'}
 MAX_FUNCTION_LINES = 60
 
 
@@ -74,15 +78,14 @@ def test_every_module_is_in_a_layer() -> None:
 @pytest.mark.parametrize('name', sorted(MODULES))
 def test_imports_go_down_the_layers_only(name: str) -> None:
     if layer(name) is None:                    # the package root re-exports the library API
-        core = {'kinematics', 'collision', 'planning'}
-        assert {layer(m) for m in ours(name, MODULES[name])} <= core
+        assert {layer(m) for m in ours(name, MODULES[name])} <= CORE
         return
     for target in ours(name, MODULES[name]):
         assert layer(target) in ALLOWED[layer(name)] | {layer(name)}, f'{name} -> {target}'
 
 
 @pytest.mark.parametrize('name', [m for m in sorted(MODULES)
-                                  if layer(m) in ('kinematics', 'collision', 'planning')])
+                                  if layer(m) in CORE])
 def test_the_core_imports_no_ros(name: str) -> None:
     roots = {m.split('.')[0] for m in imported(name, MODULES[name])}
     assert not roots & ROS_PACKAGES, f'{name} imports {roots & ROS_PACKAGES}'
@@ -124,3 +127,19 @@ def test_functions_are_short(name: str) -> None:
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
             and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES]
     assert not long, f'{name}: ' + ', '.join(long)
+
+
+TESTS = Path(__file__).resolve().parent
+
+
+@pytest.mark.parametrize('path', sorted(TESTS.glob('*.py')), ids=lambda p: p.name)
+def test_no_test_module_imports_another(path: Path) -> None:
+    # what tests share lives in helper modules (node_under_test, profile_cases, ...) or in
+    # conftest's fixtures, so that any one test module runs alone
+    tree = ast.parse(path.read_text(encoding='utf-8'))
+    for node in ast.walk(tree):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                 else [node.module or ''] if isinstance(node, ast.ImportFrom) else [])
+        for name in names:
+            assert not (name.startswith('test_') or name == 'conftest'), \
+                f'{path.name} imports {name}'

@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode, Objective
-from trajplan_ros.planning.paper_experiment import PAPER_TABLE5
+from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import plan
-from trajplan_ros.planning.reference import exact_minimum
+from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case
 from trajplan_ros.tools.bench.methods import METHODS, pyswarms_logging
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TABLE5
+from trajplan_ros.tools.bench.reference import exact_minimum
 from trajplan_ros.tools.bench.report import format_failures, summarise
 from trajplan_ros.tools.bench.runner import Results, run
 from trajplan_ros.tools.cli import main
@@ -234,8 +234,8 @@ def test_pyswarms_is_seeded_and_leaves_logging_and_numpy_alone(
 _FRESH_PYSWARMS = """
 import logging, os, sys
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.search.objective import Mode
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import load, METHODS
 root = logging.getLogger()
@@ -255,6 +255,7 @@ print(before == (list(root.handlers), root.level), os.listdir())
 @NEEDS_PYSWARMS
 def test_pyswarms_import_and_run_write_nothing_in_a_fresh_process(tmp_path: Path) -> None:
     env = {k: v for k, v in os.environ.items() if k != 'LOG_CFG'}
+    env['PYTHONPATH'] = str(Path(__file__).resolve().parents[1])     # this tree's package
     done = subprocess.run([sys.executable, '-c', _FRESH_PYSWARMS], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300, check=True)
     guarded, unguarded = done.stdout.splitlines()

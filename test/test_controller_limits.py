@@ -17,12 +17,12 @@ from __future__ import annotations
 from controller_interpolation import ControllerTrajectory
 from controller_limits import _coefficients, controller_peaks, peaks, random_law, random_move
 import numpy as np
+from profile_cases import arm_of
 import pytest
-from test_profile_trajectory import arm_of
 from trajplan_ros import paper_arm
-from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TRAPEZOIDAL
-from trajplan_ros.planning.trajectory import _profiles, motion_trajectory
+from trajplan_ros.motion.motion_profile import Timing
+from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TRAPEZOIDAL
+from trajplan_ros.motion.trajectory import _profiles, motion_trajectory
 
 ARMS = {'so101': lambda: arm_of('so101'), 'panda': lambda: arm_of('panda'), 'paper': paper_arm}
 LAWS = {'servo': SERVO, 'trapezoidal': TRAPEZOIDAL, 'jerk_limited': JERK_LIMITED}

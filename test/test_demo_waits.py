@@ -12,7 +12,7 @@ from pathlib import Path
 import sys
 import threading
 
-from conftest import LIVENESS_S
+from node_under_test import LIVENESS_S
 import pytest
 from trajplan_ros.tools.demo import _wait_until_ready
 from trajplan_ros.tools.node_process import PlannerProcess

@@ -27,15 +27,16 @@ import os
 from pathlib import Path
 import sys
 from typing import Any, Iterator, Mapping
-import xml.etree.ElementTree as ET
 
+from declared_dependencies import (DISTRIBUTION_KEYS, install_requires, is_python_key,
+                                   KEY_DISTRIBUTIONS, package_dependencies, package_keys, REPO,
+                                   ROS_DISTRIBUTIONS, RUN_TAGS, setup_argument)
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 from packaging.version import Version
 import pytest
 import yaml
 
-REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'trajplan_ros'
 ROSDEP_YAML = Path(__file__).with_name('rosdep_keys.yaml')
 #: The package's own rosdep source, for keys rosdistro lacks (a user lists it before rosdep's).
@@ -46,60 +47,6 @@ ROSDISTRO_YAML = Path(__file__).with_name('rosdistro_jazzy.yaml')
 NOBLE_APT = Path(__file__).with_name('ubuntu_noble_apt.txt')
 #: The installers rosdep names in a rule (REP 111), as opposed to an OS release's codename.
 INSTALLERS = ('apt', 'pip', 'source')
-
-#: PyPI distribution (canonical name) -> its rosdep key. Adding a dependency: a line here, the
-#: requirement in setup.py, the key in package.xml and its entry in rosdep_keys.yaml.
-DISTRIBUTION_KEYS = {
-    'defusedxml': 'python3-defusedxml',
-    'numba': 'python3-numba-pip',
-    'numpy': 'python3-numpy',
-    'pytest': 'python3-pytest',
-    'pyyaml': 'python3-yaml',
-    'setuptools': 'python3-setuptools',
-    'trimesh': 'python3-trimesh-pip',
-    'yourdfpy': 'python3-yourdfpy-pip',
-}
-#: PyPI distributions that are ROS packages too (cmeel wheels with their ament index): their
-#: rosdep key is the ROS package's name.
-ROS_DISTRIBUTIONS = {'coal': 'coal'}
-KEY_DISTRIBUTIONS = {key: dist for dist, key in DISTRIBUTION_KEYS.items()}
-
-#: package.xml's tags of what the package needs at run time (REP 140).
-RUN_TAGS = ('depend', 'exec_depend')
-
-
-# --- what setup.py and package.xml declare -----------------------------------------------------
-
-def setup_argument(name: str) -> Any:
-    """Return the literal value of setup.py's ``setup(name=...)`` keyword (read, not run)."""
-    tree = ast.parse((REPO / 'setup.py').read_text(encoding='utf-8'))
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Call) and getattr(node.func, 'id', None) == 'setup':
-            for keyword in node.keywords:
-                if keyword.arg == name:
-                    return ast.literal_eval(keyword.value)
-    raise LookupError(f'setup.py: no setup({name}=...)')
-
-
-def install_requires() -> set[str]:
-    """Return the canonical names of the distributions in setup.py's install_requires."""
-    return {canonicalize_name(Requirement(r).name) for r in setup_argument('install_requires')}
-
-
-def package_dependencies() -> list[tuple[str, str]]:
-    """Return package.xml's dependencies as (tag, key), e.g. ('exec_depend', 'rclpy')."""
-    root = ET.parse(REPO / 'package.xml').getroot()
-    return [(e.tag, (e.text or '').strip()) for e in root if e.tag.endswith('depend')]
-
-
-def package_keys(*tags: str) -> set[str]:
-    """Return the keys of package.xml's dependencies of the given tags (all without tags)."""
-    return {key for tag, key in package_dependencies() if not tags or tag in tags}
-
-
-def is_python_key(key: str) -> bool:
-    """Whether a rosdep key names a Python distribution (rather than a ROS package)."""
-    return key.startswith('python3-')
 
 
 # --- what rosdep and the ament index define ----------------------------------------------------

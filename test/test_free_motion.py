@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
+from trajplan_ros.collision.free_motion import check_motion, START_TOLERANCE
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.kinematics.jit import kernels
 from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.motion.motion_profile import MotionProfile, Timing
+from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.planning import prepare
-from trajplan_ros.planning.free_motion import check_motion, START_TOLERANCE
-from trajplan_ros.planning.motion_profile import MotionProfile, Timing
-from trajplan_ros.planning.trajectory import motion_states
 from trajplan_ros.tools.bench.clearance import IndependentCheck
 
 TARGET = (0.151171, 0.19162, 0.172124)

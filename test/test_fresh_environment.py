@@ -27,16 +27,18 @@ import shutil
 import subprocess
 import sys
 
-from conftest import Install, LIVENESS_S, NodeProcess
+from declared_dependencies import (is_python_key, KEY_DISTRIBUTIONS, package_keys,
+                                   ROS_DISTRIBUTIONS, RUN_TAGS, setup_argument)
 from nav_msgs.srv import GetPlan
+from node_under_test import Install, LIVENESS_S, NodeProcess
 import numpy as np
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 import pytest
-from test_dependencies import (is_python_key, KEY_DISTRIBUTIONS, package_keys,
-                               ROS_DISTRIBUTIONS, RUN_TAGS, setup_argument)
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
+
+pytestmark = pytest.mark.system
 
 PAPER_GOAL = tuple(PAPER_TARGET.tolist())
 SITE = Path('lib', f'python{sys.version_info.major}.{sys.version_info.minor}', 'site-packages')

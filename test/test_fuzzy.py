@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from trajplan_ros.planning.fuzzy import gaussian, OUTPUT_LEVELS, RewardPunishment, RULE_TABLE
+from trajplan_ros.search.fuzzy import gaussian, OUTPUT_LEVELS, RewardPunishment, RULE_TABLE
 
 S = RewardPunishment()
 ERR_MAX = 0.748

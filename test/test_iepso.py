@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.planning.iepso import iepso
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.reference import exact_minimum
+from trajplan_ros.search.iepso import iepso
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.tools.bench.reference import exact_minimum
 
 ARM = paper_arm()
 TARGET = np.array([0.151171, 0.19162, 0.172124])

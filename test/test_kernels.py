@@ -24,7 +24,7 @@ from trajplan_ros import ArmModel, plan
 from trajplan_ros.kinematics import forward
 from trajplan_ros.kinematics.jit import CORE, core_stamp, kernels
 from trajplan_ros.planning import prepare, RewardPunishment
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
@@ -99,6 +99,44 @@ def test_a_change_anywhere_in_the_core_changes_every_kernels_cache_key(tmp_path)
     core_stamp.cache_clear()
 
 
+def test_comments_and_docstrings_keep_the_cache_key_code_changes_it(tmp_path) -> None:
+    core = (tmp_path / 'core',)
+    core[0].mkdir()
+    source = core[0] / 'a.py'
+    source.write_text('"""A module."""\nX = 1\n\n\ndef f():\n    """F."""\n    return X\n')
+    before = core_stamp(core)
+    source.write_text('"""Its docstring, rewritten."""\n# a comment\nX = 1  # one\n\n\n'
+                      'def f():\n    """Another."""\n\n    return X\n')
+    core_stamp.cache_clear()
+    assert core_stamp(core) == before
+    for code in ('X = 2\n\n\ndef f():\n    return X\n',        # a constant
+                 'X = 1\n\n\ndef f():\n    return "F."\n'):      # a string that is no docstring
+        source.write_text(code)
+        core_stamp.cache_clear()
+        assert core_stamp(core) != before
+    core_stamp.cache_clear()
+
+
+def test_numba_still_has_the_caching_names_jit_relies_on() -> None:
+    # jit.py subclasses numba's cache locators and sets a dispatcher's cache (private API):
+    # a numba release that moves them must fail here, by name, not deep inside a plan
+    from numba.core import caching
+    for name in ('UserProvidedCacheLocator', 'InTreeCacheLocator', 'UserWideCacheLocator',
+                 'CompileResultCacheImpl', 'FunctionCache'):
+        assert hasattr(caching, name), f'numba.core.caching.{name} is gone'
+    assert hasattr(caching.CompileResultCacheImpl, '_locator_classes')
+    assert hasattr(caching.FunctionCache, '_impl_class')
+    for locator in (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator):
+        for method in ('get_source_stamp', 'get_disambiguator', 'get_suitable_cache_subpath'):
+            assert hasattr(locator, method), f'{locator.__name__}.{method} is gone'
+    prepare()
+    for k in kernels():
+        assert isinstance(k._cache, caching.FunctionCache), k
+        index = k._cache._cache_file._index_path
+        assert Path(index).name.startswith(f'{k.py_func.__module__.rsplit(".", 1)[-1]}.'
+                                           f'{k.py_func.__qualname__}-kernel.'), index
+
+
 def test_kernels_are_cached_under_the_core_stamp() -> None:
     prepare()
     for k in kernels():
@@ -136,6 +174,7 @@ def run_plan(env: dict[str, str]) -> subprocess.CompletedProcess:
                           env=env, cwd=Path(__file__).resolve().parents[1])
 
 
+@pytest.mark.system
 def test_the_first_run_compiles_and_says_so_later_ones_load(empty_kernel_cache: Path) -> None:
     env = {**os.environ, 'NUMBA_CACHE_DIR': str(empty_kernel_cache)}
     first = run_plan(env)
@@ -164,7 +203,7 @@ def test_without_a_writable_cache_it_compiles_and_warns_once() -> None:
            'NUMBA_CACHE_DIR': '/dev/null/cache'}
     script = ('import numpy as np, trajplan_ros\n'
               'from trajplan_ros.kinematics.jit import kernels\n'
-              'from trajplan_ros.planning.time_law import motion_times, servo_law\n'
+              'from trajplan_ros.motion.time_law import motion_times, servo_law\n'
               'law = servo_law(np.array([0.5, 0.25]))\n'
               'print(motion_times(law, np.array([[1.0, 1.0]]), np.zeros(2))[0])\n'
               'print(sum(bool(k.stats.cache_path) for k in kernels()), len(kernels()))\n')

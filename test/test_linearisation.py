@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, paper_arm
-from trajplan_ros.planning.linearisation import (complete_null_basis, invert_symmetric,
-                                                 line_minimax, line_searches)
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import Linearisation
+from trajplan_ros.search.linearisation import (complete_null_basis, invert_symmetric,
+                                               line_minimax, line_searches)
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.polish import Linearisation
 
 
 def random_arm(rng: np.random.Generator, n: int) -> ArmModel:

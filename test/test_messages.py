@@ -59,15 +59,3 @@ def test_path_message_has_one_pose_per_point_from_forward_kinematics() -> None:
         p, o = pose.pose.position, pose.pose.orientation
         np.testing.assert_allclose([p.x, p.y, p.z], tool[k], atol=1e-15)
         np.testing.assert_allclose(matrix([o.x, o.y, o.z, o.w])[:, 2], axis[k], atol=1e-12)
-
-
-def test_path_message_takes_premade_poses_first() -> None:
-    from geometry_msgs.msg import PoseStamped
-
-    traj = servo_trajectory(np.zeros(5), np.full(5, 0.1), 0.2, joint_names=ARM.joint_names)
-    blanks = [PoseStamped() for _ in range(2)]
-    premade = set(map(id, blanks))
-    path = path_msg(ARM, traj, Header(frame_id='base_link'), blanks)
-    assert blanks == []
-    assert sum(id(p) in premade for p in path.poses) == 2
-    assert len(path.poses) == len(traj.times) == 5              # 0.5 s at 0.1 s a point

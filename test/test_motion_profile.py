@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, paper_arm, plan
-from trajplan_ros.planning.motion_profile import (JointLimits, MotionProfile, Profile,
-                                                  read_joint_limits, Timing)
-from trajplan_ros.planning.time_law import JERK_LIMITED, joint_time, SERVO, TRAPEZOIDAL
+from trajplan_ros.motion.motion_profile import (JointLimits, MotionProfile, Profile,
+                                                read_joint_limits, Timing)
+from trajplan_ros.motion.time_law import JERK_LIMITED, joint_time, SERVO, TRAPEZOIDAL
 
 #: MoveIt's format, as a moveit_config package has it (nested variant below).
 LIMITS = """

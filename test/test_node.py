@@ -17,93 +17,25 @@ import sys
 import time
 from typing import Iterator
 
-from conftest import Install, LIVENESS_S, NodeProcess, wait_until
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
+from node_under_test import (ARM, check_servo_trajectory, fmt, HOPELESS_GOAL, Install,
+                             LIVENESS_S, NodeProcess, OMEGA, rotation, started_from,
+                             trajectory_to, wait_until)
 import numpy as np
 import pytest
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
-from trajplan_ros import paper_arm, plan
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros import plan
 from trajplan_ros.ros import outcomes
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
+pytestmark = pytest.mark.dds
 
-ARM = paper_arm()
-OMEGA = 0.2                                       # the node's default angular_velocity
+
 PAPER_GOAL = tuple(PAPER_TARGET.tolist())
-HOPELESS_GOAL = (0.05, -0.05, -0.25)              # inside the reach sphere, never reached
-
-
-def fmt(xyz: tuple[float, ...]) -> str:
-    """Write a point as the node does in its log lines, as a regex."""
-    return re.escape('(' + ', '.join(f'{v:.6g}' for v in xyz) + ')')
-
-
-def started_from(node: NodeProcess, kind: str, goal: tuple[float, float, float],
-                 after: int) -> tuple[str, np.ndarray]:
-    """Return the label and start angles of the plan the node logged for ``goal``."""
-    sources = r'(?: \[[^]]*\])?'                  # where the joints came from, if not one place
-    m = node.wait_for(rf'\]: ({kind} #\d+) {fmt(goal)} m from q = \(([^)]*)\) rad{sources}: ',
-                      after)
-    return m.group(1), np.array([float(v) for v in m.group(2).split(',')])
-
-
-def trajectory_to(box, goal: tuple[float, float, float], arm=ARM, tol: float = 1e-5):
-    """
-    Return the next trajectory in ``box`` that ends at ``goal``.
-
-    One from an earlier plan may still be on its way: the node publishes just after answering.
-    """
-    deadline = time.monotonic() + LIVENESS_S
-    while True:
-        msg = box.get(timeout=max(0.0, deadline - time.monotonic()))
-        if len(msg.joint_names) == arm.n_joints:
-            end = np.array(msg.points[-1].positions)
-            if np.linalg.norm(arm.tool(end[None, :])[0][0] - goal) <= tol:
-                return msg
-
-
-def seconds(duration) -> float:
-    return duration.sec + 1e-9 * duration.nanosec
-
-
-def check_servo_trajectory(msg: JointTrajectory, start: np.ndarray, omega: float = OMEGA,
-                           names: tuple[str, ...] = ARM.joint_names) -> np.ndarray:
-    """Assert the rules of a published trajectory; return its final joint angles."""
-    assert tuple(msg.joint_names) == tuple(names)
-    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (0, 0)       # start now
-    assert msg.points
-    t = np.array([seconds(p.time_from_start) for p in msg.points])
-    q = np.array([p.positions for p in msg.points])
-    assert q.shape == (t.size, len(names))
-    # positions only, so that joint_trajectory_controller interpolates linearly (exact here)
-    assert not any(len(p.velocities) or len(p.accelerations) for p in msg.points)
-    assert t[0] > 0 and np.all(np.diff(t) > 0)                                # strictly increasing
-    # fixed angular velocity between points: no joint turns faster than omega; it never turns
-    # back and, once stopped, stays stopped (the segment of a joint's arrival may be slower)
-    v = np.diff(q, axis=0) / np.diff(t)[:, None]
-    assert np.all(np.abs(v) <= omega * (1 + 1e-9))
-    for j in range(len(names)):
-        moving = np.abs(v[:, j]) > omega / 2
-        assert np.all(np.diff(moving.astype(int)) <= 0), f'joint {names[j]} restarts'
-        assert len(set(np.sign(v[moving, j]))) <= 1, f'joint {names[j]} turns back'
-    # the first point is omega * t1 from the start (or at the start); ``start`` comes from a
-    # log line with 6 significant digits, hence the tolerance
-    first = np.abs(q[0] - start)
-    assert np.all(np.isclose(first, omega * t[0], atol=1e-5) | np.isclose(first, 0, atol=1e-5))
-    # eq. (10): the motion lasts max |goal - start| / omega
-    assert t[-1] == pytest.approx(np.max(np.abs(q[-1] - start)) / omega, abs=1e-4)
-    return q[-1]
-
-
-def rotation(quat) -> np.ndarray:
-    x, y, z, w = quat.x, quat.y, quat.z, quat.w
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 @pytest.fixture(scope='module')

@@ -10,19 +10,21 @@ from __future__ import annotations
 
 from typing import Iterator
 
-from conftest import LIVENESS_S, NodeProcess
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from nav_msgs.srv import GetPlan
+from node_under_test import LIVENESS_S, NodeProcess
 import numpy as np
 import pytest
 from std_msgs.msg import Header
 from trajplan_ros import paper_arm, plan
-from trajplan_ros.planning.motion_profile import MotionProfile, Timing
-from trajplan_ros.planning.trajectory import motion_states
+from trajplan_ros.motion.motion_profile import MotionProfile, Timing
+from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.ros.outcomes import outcome_values
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 from visualization_msgs.msg import Marker, MarkerArray
+
+pytestmark = pytest.mark.dds
 
 NS = '/collisions'
 TARGET = (0.151171, 0.19162, 0.172124)

@@ -13,8 +13,11 @@ import re
 import subprocess
 import sys
 
-from conftest import Install, LIVENESS_S
+from node_under_test import Install, LIVENESS_S
+import pytest
 from trajplan_ros.tools.node_process import COMPILE_BOUND_S
+
+pytestmark = pytest.mark.system
 
 
 def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, tmp_path) -> None:

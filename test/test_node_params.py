@@ -12,17 +12,19 @@ import math
 import re
 from typing import Iterator
 
-from conftest import LIVENESS_S, NodeProcess
 from geometry_msgs.msg import Point
 from nav_msgs.srv import GetPlan
+from node_under_test import (check_servo_trajectory, HOPELESS_GOAL, LIVENESS_S, NodeProcess,
+                             started_from, trajectory_to)
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
-from test_node import check_servo_trajectory, HOPELESS_GOAL, started_from, trajectory_to
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import ArmModel, paper_arm
 from trajplan_ros.ros.settings import default_values
 from trajplan_ros.tools.ros_client import plan_request, RosClient
+
+pytestmark = pytest.mark.dds
 
 
 NODE = '/arm_ns/trajplan'

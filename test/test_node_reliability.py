@@ -11,20 +11,21 @@ import re
 import signal
 from typing import Iterator
 
-from conftest import LIVENESS_S, NodeProcess, wait_until
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
+from node_under_test import fmt, HOPELESS_GOAL, LIVENESS_S, NodeProcess, wait_until
 import numpy as np
 import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
-from test_node import fmt, HOPELESS_GOAL
 from trajplan_ros import paper_arm
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient
+
+pytestmark = pytest.mark.dds
 
 
 ARM = paper_arm()

@@ -12,22 +12,24 @@ from __future__ import annotations
 
 from typing import Any, Iterator
 
-from conftest import NodeProcess
 from geometry_msgs.msg import PointStamped
+from hostile_urdf import BILLION_LAUGHS
 from nav_msgs.srv import GetPlan
+from node_under_test import (check_servo_trajectory, fmt, NodeProcess, started_from,
+                             trajectory_to)
 import numpy as np
 import pytest
 from rclpy.duration import Duration
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
-from test_node import check_servo_trajectory, fmt, started_from, trajectory_to
-from test_urdf_import import BILLION_LAUGHS
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import ArmModel
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 import yourdfpy
+
+pytestmark = pytest.mark.dds
 
 
 NS = '/so101_ns'

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.planning.objective import InvalidRequest, Objective
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
-from trajplan_ros.planning.reference import exact_minimum
+from trajplan_ros.search.objective import InvalidRequest, Objective
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET as TARGET
+from trajplan_ros.tools.bench.reference import exact_minimum
 
 ARM = paper_arm()
 

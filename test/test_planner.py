@@ -11,12 +11,12 @@ import pytest
 
 from trajplan_ros import DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
 from trajplan_ros.planning import planner
-from trajplan_ros.planning.iepso import iepso
-from trajplan_ros.planning.objective import Mode, Objective
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
-from trajplan_ros.planning.reference import _solutions, radial_angle
+from trajplan_ros.search.iepso import iepso
+from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.tools.bench.cases import draw_cases
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.reference import _solutions, radial_angle
 
 TARGET = PAPER_TARGET.tolist()
 #: Inside the reach sphere but out of reach: IEPSO searches it for dozens of iterations.

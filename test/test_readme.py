@@ -41,6 +41,8 @@ import uuid
 import pytest
 from trajplan_ros.tools.node_process import PlannerProcess, TIMEOUT_S
 
+pytestmark = pytest.mark.system
+
 
 REPO = Path(__file__).resolve().parents[1]
 README = Path(os.environ.get('TRAJPLAN_README') or REPO / 'README.md')

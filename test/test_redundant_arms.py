@@ -8,11 +8,12 @@ import pytest
 from scipy.optimize import linprog
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning import iepso as iepso_module, plan
-from trajplan_ros.planning.active_set import (active_pieces, minimax_step, solve_augmented,
-                                              sqp_steps)
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import _active_sets, LARGEST, Linearisation, polish
+from trajplan_ros.planning import plan
+from trajplan_ros.search import iepso as iepso_module
+from trajplan_ros.search.active_set import (active_pieces, minimax_step, solve_augmented,
+                                            sqp_steps)
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.polish import _active_sets, LARGEST, Linearisation, polish
 from trajplan_ros.tools.bench.chain_bench import local_minimax
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, plan, PlanStatus
-from trajplan_ros.planning.objective import Objective
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.chain_bench import minimax_reference
 
 #: Two joints about parallel z axes (a planar arm), 0.1 m apart, a tool link 0.08 m further.

@@ -6,14 +6,14 @@ import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning import plan
-from trajplan_ros.planning.iepso import iepso
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET as TARGET
-from trajplan_ros.planning.polish import Linearisation
-from trajplan_ros.planning.reference import exact_minimum
-from trajplan_ros.planning.solution_curve import (curve_constraint, curve_seeds, distinct, follow,
-                                                  limit_crossings, project)
+from trajplan_ros.search.iepso import iepso
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.polish import Linearisation
+from trajplan_ros.search.solution_curve import (curve_constraint, curve_seeds, distinct, follow,
+                                                limit_crossings, project_onto_curves)
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET as TARGET
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.reference import exact_minimum
 
 ARM = paper_arm()
 SIX = ArmModel.from_dh(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.05],
@@ -51,7 +51,8 @@ def test_radial_solutions_of_five_joints_lie_on_the_curves_the_search_follows() 
     obj = Objective(arm, goal, start, mode='radial')
     curve = curve_constraint(obj)
     assert obj.arm.planned == 5 and len(curve.across_basis) == 1
-    x = project(obj, np.random.default_rng(0).uniform(obj.lower, obj.upper, (3000, 5)), 40)
+    probes = np.random.default_rng(0).uniform(obj.lower, obj.upper, (3000, 5))
+    x = project_onto_curves(obj, probes, 40)
     p, u = obj.tool(x)
     found = x[(obj.errors(p, u) < 1e-10) & obj.arm.within_limits(obj.full(x))]
     solutions = found[np.unique(np.round(found, 4), axis=0, return_index=True)[1]]

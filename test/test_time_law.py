@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import ruckig
 from trajplan_ros import ArmModel, paper_arm
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import linearise_at
-from trajplan_ros.planning.time_law import (JERK_LIMITED, joint_reach, joint_time, motion_times,
-                                            SERVO, servo_law, tie_scales, TimeLaw, TRAPEZOIDAL)
+from trajplan_ros.motion.time_law import (JERK_LIMITED, joint_reach, joint_time, motion_times,
+                                          SERVO, servo_law, tie_scales, TimeLaw, TRAPEZOIDAL)
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.polish import linearise_at
 
 
 def velocity_limited_arm() -> ArmModel:

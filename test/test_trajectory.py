@@ -6,8 +6,8 @@ import tracemalloc
 import numpy as np
 import pytest
 
+from trajplan_ros.motion.trajectory import servo_trajectory
 from trajplan_ros.planning import trajectory_points
-from trajplan_ros.planning.trajectory import servo_trajectory
 
 START = np.array([0.0, 0.5, -0.2, 0.1, 0.0])
 GOAL = np.array([0.9, 0.1, 0.3, 0.1, 0.0])

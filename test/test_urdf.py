@@ -6,13 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 import xml.etree.ElementTree as ET
 
-from conftest import Install
+from node_under_test import Install
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.objective import DEFAULT_OMEGA
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 from trajplan_ros.tools.cli import main
 
 RESOURCE = Path(__file__).resolve().parents[1] / 'resource' / 'paper_arm.urdf'
@@ -109,6 +109,7 @@ def test_installed_resource_is_current() -> None:
     assert RESOURCE.read_text(encoding='utf-8') == urdf_xml(paper_arm(), velocity=DEFAULT_OMEGA)
 
 
+@pytest.mark.system
 def test_urdf_is_installed_with_the_package(colcon_install: Install) -> None:
     """Check setup.py installs resource/*.urdf to share/trajplan_ros/urdf/ (colcon build)."""
     installed = colcon_install.prefix / 'share' / 'trajplan_ros' / 'urdf' / 'paper_arm.urdf'

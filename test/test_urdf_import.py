@@ -6,13 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 import time
 
+from hostile_urdf import BILLION_LAUGHS
 import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning import plan
-from trajplan_ros.planning.objective import DEFAULT_OMEGA
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 import yourdfpy
 
@@ -212,11 +213,6 @@ def test_an_unknown_link_is_refused_with_the_links_names() -> None:
     many = _chain_urdf([(f'j{i}', 'fixed') for i in range(30)])
     with pytest.raises(InvalidArmModel, match=r'has 31 links: l0, l1, .*, l19 and 11 more$'):
         ArmModel.from_urdf(many, tip_link='nosuch')
-
-
-BILLION_LAUGHS = '<?xml version="1.0"?><!DOCTYPE lolz [<!ENTITY lol "lol">' + ''.join(
-    f'<!ENTITY lol{i + 1} "{("&lol" + (str(i) if i else "") + ";") * 10}">' for i in range(9)
-) + ']><robot name="r"><link name="&lol9;"/></robot>'
 
 
 def test_untrusted_text_is_refused_quickly_without_reading_files(tmp_path: Path) -> None:

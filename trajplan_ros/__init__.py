@@ -7,12 +7,15 @@ The package is layered; each layer uses only those listed before it:
 
 * ``kinematics``: the arm model (forward kinematics and Jacobian) and how kernels are compiled
   (``jit``: numba, one cache policy);
-* ``collision``: the arm's collision shapes, the spheres that hold them, the pairs to skip, the
-  scene and the distances (coal);
-* ``planning``: the objective, the fuzzy shaping, IEPSO and the comparison optimisers, the
-  polish, the trajectory and ``plan``: numpy, with the hot loops as compiled kernels;
+* ``motion``: motion in time: the servo law (eq. 10), the trapezoidal and jerk-limited profiles,
+  rest-to-rest phases and trajectories;
+* ``collision``: the arm's collision shapes, the spheres and hulls that hold them, the pairs to
+  skip, the scene, the distances (coal) and the continuous check of a motion;
+* ``search``: the objective (eq. 9-14), the fuzzy term, IEPSO and its peers, the polish, the
+  solution curves and the search for a free joint goal;
+* ``planning``: ``plan``, its request and result;
 * ``ros``: the ROS 2 node (the only layer besides ``tools`` that imports rclpy);
-* ``tools``: the ``trajplan`` command, benchmarks, figures and the demo.
+* ``tools``: the ``trajplan`` command, benchmarks and their reference oracles, figures, the demo.
 
 The names below are the public library API.
 """
@@ -21,15 +24,15 @@ from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE,
-                                   InvalidRequest, JointLimits, Mode, MotionProfile, Objective,
-                                   plan, PlanResult, PlanStatus, read_joint_limits,
-                                   RewardPunishment, servo_trajectory, Trajectory,
-                                   trajectory_points)
+                                   InvalidRequest, JointLimits, Mode, motion_trajectory,
+                                   MotionProfile, Objective, plan, PlanResult, PlanStatus,
+                                   Profile, read_joint_limits, RewardPunishment, servo_trajectory,
+                                   Timing, Trajectory, trajectory_points)
 
 __all__ = [
     'ALGORITHMS', 'ArmCollision', 'ArmModel', 'CollisionWorld', 'DEFAULT_AXIS_TOLERANCE',
     'DEFAULT_TOLERANCE', 'InvalidArmModel', 'InvalidCollisionInput', 'Scene',
     'InvalidRequest', 'JointLimits', 'Mode', 'MotionProfile', 'Objective', 'PlanResult',
-    'PlanStatus', 'RewardPunishment', 'Trajectory', 'paper_arm', 'plan', 'read_joint_limits',
-    'servo_trajectory', 'trajectory_points',
+    'PlanStatus', 'Profile', 'RewardPunishment', 'Timing', 'Trajectory', 'motion_trajectory',
+    'paper_arm', 'plan', 'read_joint_limits', 'servo_trajectory', 'trajectory_points',
 ]

@@ -10,7 +10,7 @@ at joint angles q is F_k(q) Rz(q_k) A_k^T O, with F_k the chain's frame of joint
 turn (``ArmModel.frames``), A_k the turn of z onto the joint axis (``urdf_import``) and O the
 fixed origins after it (``attachment``).
 
-For the continuous check (issue 29, item 4), ``reach[j, l]`` bounds how far any point of link
+For the continuous check (``free_motion``), ``reach[j, l]`` bounds how far any point of link
 l is from joint j's axis, in every configuration: the lengths of the links from joint j to the
 link's frame plus the farthest point of its geometry from that frame. A turn of dq_j moves no
 point of the link by more than |dq_j| reach[j, l].

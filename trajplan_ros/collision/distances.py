@@ -521,7 +521,7 @@ class CollisionWorld:
             list(self.arm.convexes)
             + [(None, [(SHAPE_KINDS[s.kind], s.dimensions, s.pose)]) for s in shapes]))
         #: (P, n_joints): a turn dq moves pair p's links towards each other by at most
-        #: sum_j |dq_j| sweep[p, j] (issue 29, item 4)
+        #: sum_j |dq_j| sweep[p, j] (the continuous check, ``free_motion``)
         put(self, 'sweep', np.array([self._sweep(a, b) for a, b in self.pairs]
                                     ).reshape(len(self.pairs), -1))
 

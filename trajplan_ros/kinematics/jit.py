@@ -12,9 +12,14 @@ warning saying how to set ``NUMBA_CACHE_DIR``.
 
 numba's own cache is keyed by the kernel's file alone: it would keep a kernel whose callee in
 another file changed, with the callee's old code and constants compiled in. Ours is keyed by
-the package version and a hash of every source file of the core (``kinematics``,
-``collision`` and ``planning``, ``core_stamp``): any change there recompiles every kernel, so
-a kernel may call kernels and read constants of other core files and can never run stale.
+the package version and a hash of the code of every source file of the core (the folders of
+``CORE``, ``core_stamp``): any change of code there recompiles every kernel, so a kernel may
+call kernels and read constants of other core files and can never run stale. The hash is of
+each file's syntax tree without docstrings, and a kernel's cache file is named without its
+line number, so an edit of comments or docstrings alone keeps every kernel.
+
+This reaches into numba's caching classes (``numba.core.caching``); ``setup.py`` pins the range
+of numba releases tested, and ``test_kernels`` checks the names used here.
 
 ``warm_up`` compiles or loads every kernel once, so that no plan pays for it; it reports how
 long that took and whether anything had to be compiled. ``uncached`` tells beforehand how many
@@ -22,6 +27,7 @@ kernels have nothing on disk yet, so that a first start can say that it is compi
 """
 from __future__ import annotations
 
+import ast
 from dataclasses import dataclass
 import functools
 import hashlib
@@ -39,8 +45,8 @@ __all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels'
 
 _LOG = logging.getLogger('trajplan_ros')
 #: The folders whose sources key every kernel's cache: the kernels and all they read.
-CORE = tuple(Path(__file__).resolve().parents[1] / name for name in ('kinematics', 'collision',
-                                                                     'planning'))
+CORE = tuple(Path(__file__).resolve().parents[1] / name
+             for name in ('kinematics', 'motion', 'collision', 'search', 'planning'))
 #: How long compiling every kernel takes (doc/benchmarks.md: the first start).
 FIRST_COMPILE = 'about a minute on two idle cores, longer on a busy machine'
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
@@ -57,13 +63,25 @@ def _version() -> str:
 
 @functools.lru_cache(maxsize=None)
 def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
-    """Return a hash of the package version and of every ``.py`` file under ``folders``."""
+    """Return a hash of the package version and of the code of every ``.py`` file in folders."""
     digest = hashlib.sha256(_version().encode())
     for folder in folders:
         for path in sorted(folder.rglob('*.py')):
             digest.update(str(path.relative_to(folder.parent)).encode())
-            digest.update(path.read_bytes())
+            digest.update(_code(path).encode())
     return digest.hexdigest()
+
+
+def _code(path: Path) -> str:
+    """Return a file's syntax tree without docstrings (comments are not in it), as text."""
+    tree = ast.parse(path.read_bytes(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            first = node.body[0] if node.body else None
+            if (isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+                    and isinstance(first.value.value, str)):
+                node.body = node.body[1:] or [ast.Pass()]
+    return ast.dump(tree)
 
 
 class _CoreStamped:
@@ -78,6 +96,10 @@ class _CoreStamped:
 
     def get_source_stamp(self) -> str:
         return core_stamp()
+
+    def get_disambiguator(self) -> str:
+        """Name the cache file by the kernel's module and name alone, not its line."""
+        return 'kernel'
 
     @classmethod
     def get_suitable_cache_subpath(cls, py_file: str) -> str:

@@ -26,16 +26,17 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.collision.free_motion import sphere_pass, write_next_checks
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
-from trajplan_ros.planning.baselines import de, ga, pso, spso
-from trajplan_ros.planning.free_motion import free_joint_goal, settle, sphere_pass
-from trajplan_ros.planning.fuzzy import RewardPunishment
-from trajplan_ros.planning.iepso import iepso
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
-from trajplan_ros.planning.optimize import Interrupt, OptimizeResult
-from trajplan_ros.planning.trajectory import motion_points, motion_trajectory, Trajectory
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.trajectory import motion_points, motion_trajectory, Trajectory
+from trajplan_ros.search.baselines import de, ga, pso, spso
+from trajplan_ros.search.free_goal import free_joint_goal
+from trajplan_ros.search.fuzzy import RewardPunishment
+from trajplan_ros.search.iepso import iepso
+from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
+from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 
 __all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_AXIS_TOLERANCE',
            'DEFAULT_TOLERANCE', 'describe_residual', 'prepare']
@@ -378,6 +379,7 @@ def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
         due, least = np.zeros(2, np.int64), np.array([np.inf, -1.0, 0.0])
         sphere_pass(chain, spheres, np.array([[0, 1], [0, 2]]), np.zeros((3, 2)),
                     np.zeros((3, 2)), np.full(2, -9.0), due, 0, -np.inf, least)
-        settle(np.zeros((3, 2)), np.arange(2), 0, np.zeros(2), np.full(2, -9.0), due, least)
+        write_next_checks(np.zeros((3, 2)), np.arange(2), 0, np.zeros(2), np.full(2, -9.0), due,
+                          least)
 
     return warm_up(plans, announce)

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
-from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from std_msgs.msg import Header
 from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
@@ -63,7 +62,7 @@ def _refusal(where: str, result: PlanResult, took: str) -> str:
 
 
 def run(job: Job, settings: Settings, start: PlanStart, header: Header,
-        stop: Callable[[], bool], blanks: list[PoseStamped] | None = None) -> Outcome:
+        stop: Callable[[], bool]) -> Outcome:
     """Plan ``job`` from ``start``; on success build its trajectory and tool path messages."""
     s = settings
     where = (f'{job.label} {describe_goal(job.goal)} m from q = {describe_goal(start.q)} rad'
@@ -89,7 +88,7 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
         return Outcome(False, f'{where}: refused: {reason}; {took}', 'refused', reason,
                        plan_time_s=timed)
     traj = result.trajectory(s.arm, s.sample_period)
-    path = path_msg(s.arm, traj, header, blanks) if job.is_call else None
+    path = path_msg(s.arm, traj, header) if job.is_call else None
     return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,

@@ -62,21 +62,13 @@ def trajectory_msg(traj: Trajectory) -> JointTrajectory:
     return msg
 
 
-def path_msg(arm: ArmModel, traj: Trajectory, header: Header,
-             blanks: list[PoseStamped] | None = None) -> Path:
-    """
-    Build the tool path of ``traj``: one pose per trajectory point, by forward kinematics.
-
-    The poses share ``header`` and are filled in place, taken from ``blanks`` (new
-    PoseStamped messages made in advance) while it lasts: building a message costs more than
-    filling it.
-    """
+def path_msg(arm: ArmModel, traj: Trajectory, header: Header) -> Path:
+    """Build the tool path of ``traj``: one pose per trajectory point (forward kinematics)."""
     tool = arm.frames(traj.positions)[:, -1]
     quats = quaternions(tool[:, :3, :3])
     poses = []
     for (px, py, pz), (qx, qy, qz, qw) in zip(tool[:, :3, 3].tolist(), quats.tolist()):
-        pose = blanks.pop() if blanks else PoseStamped()
-        pose.header = header
+        pose = PoseStamped(header=header)
         p, o = pose.pose.position, pose.pose.orientation
         p.x, p.y, p.z = px, py, pz
         o.x, o.y, o.z, o.w = qx, qy, qz, qw

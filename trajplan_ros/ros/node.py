@@ -62,7 +62,7 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Point, PointStamped, PoseStamped
+from geometry_msgs.msg import Point, PointStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
@@ -105,8 +105,6 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 #: After handing over a call's answer, how long the worker may wait (for nothing but the answer
 #: to go out) before it publishes the trajectory and logs, unless new work arrives first.
 ANSWER_GRACE_S = 5e-3
-#: PoseStamped messages the worker makes ahead while idle, for the next answer's path.
-BLANK_POSES = 200
 #: Python's GIL switch interval in the node process (default 5 ms): how long the executor
 #: thread may wait for the GIL while the worker computes.
 SWITCH_INTERVAL_S = 5e-4
@@ -165,7 +163,6 @@ class PlannerNode(Node):
         self._answer_lock = threading.Lock()
         self._publish_lock = threading.Lock()
         self._finished: collections.deque[tuple[Job, Path | None]] = collections.deque()
-        self._blanks: list[PoseStamped] = []                   # worker thread only
         self._current: Job | None = None                        # the job being planned
         self._flushed = threading.Event()
 
@@ -431,8 +428,7 @@ class PlannerNode(Node):
         s = self._settings
         start = self._states.start(s.arm.joint_names, s.start)
         self._log.debug(f'planning {job.label} {jobs.describe_goal(job.goal)} m')
-        outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
-                           self._blanks)
+        outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
         if outcome.timed_out:

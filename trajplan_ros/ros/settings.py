@@ -31,10 +31,10 @@ from trajplan_ros.collision.scene import Scene
 from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.motion.motion_profile import (JointLimits, MotionProfile, Profile,
+                                                read_joint_limits, Timing)
 from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
-from trajplan_ros.planning.motion_profile import (JointLimits, MotionProfile, Profile,
-                                                  read_joint_limits, Timing)
-from trajplan_ros.planning.objective import DEFAULT_OMEGA
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 
 
 __all__ = ['PARAMETERS', 'ParameterSpec', 'Settings', 'default_values']

@@ -12,8 +12,8 @@ from trajplan_ros.collision.scene import Scene
 from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
-from trajplan_ros.planning.objective import DEFAULT_OMEGA
+from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 
 __all__ = ['UsageError', 'add_arm_arguments', 'add_collision_arguments', 'add_motion_arguments',
            'arm_from_arguments', 'finite_number', 'motion_from_arguments', 'package_share',

@@ -26,7 +26,7 @@ localhost discovery) with its default parameters; this process is its client.
 2. Goal stream. ``--goals`` goals published on ``goal`` at ``--rate`` Hz while a parameter get
    goes to the node every 10 ms, after a warm-up that makes sure publisher and node have
    matched. Targets: every goal is either planned or logged as dropped, and every parameter
-   get is answered within 20 ms (issue 27: the kernels release the GIL), until every goal is
+   get is answered within 20 ms (the kernels release the GIL), until every goal is
    accounted for. ``--urdf FILE --tip-link NAME`` plans another arm (a Panda: the longest plans).
 
 Prints the figures; exits 0 when every target is met, 1 otherwise.
@@ -60,7 +60,7 @@ from trajplan_ros.tools.ros_client import RosClient
 
 __all__ = ['main']
 
-#: The targets of issue 3 (the parameter get's tightened by issue 27).
+#: The targets: the node's own overhead per call, and a parameter get's answer during plans.
 MAX_MEDIAN_OVERHEAD_S = 5e-3
 MAX_PARAMETER_LATENCY_S = 0.02
 #: The service is offered within this time (s) of the start, even on a first start's compile.

@@ -13,11 +13,11 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanResult, PlanStatus, prepare)
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
                                           add_motion_arguments, arm_from_arguments,

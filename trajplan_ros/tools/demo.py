@@ -18,8 +18,8 @@ import os
 import subprocess
 import sys
 
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.arguments import finite_number, UsageError
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.node_commands import call_planner
 from trajplan_ros.tools.node_process import COMPILE_BOUND_S, PlannerProcess, ros_environment
 

@@ -31,11 +31,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
+from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.planning import planner
-from trajplan_ros.planning.motion_profile import MotionProfile, Profile, Timing
-from trajplan_ros.planning.objective import Mode, Objective
 from trajplan_ros.planning.planner import PlanResult
-from trajplan_ros.planning.trajectory import motion_states
+from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import METHODS
 from trajplan_ros.tools.bench.runner import run

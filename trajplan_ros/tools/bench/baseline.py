@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.search.objective import Mode
 from trajplan_ros.tools.bench.methods import Answer, Method
 
 __all__ = ['baseline_method']

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode
-from trajplan_ros.planning.paper_experiment import PAPER_TARGET
-from trajplan_ros.planning.reference import exact_minimum, ExactOptimum
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.search.objective import Mode
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.reference import exact_minimum, ExactOptimum
 
 __all__ = ['Case', 'DRAWS', 'draw_cases', 'paper_case']
 

@@ -29,9 +29,9 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import InvalidRequest, Mode, Objective
-from trajplan_ros.planning.time_law import joint_reach, SERVO
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.time_law import joint_reach, SERVO
+from trajplan_ros.search.objective import InvalidRequest, Mode, Objective
 from trajplan_ros.tools.bench.methods import Answer, Method
 from trajplan_ros.tools.bench.report import format_table
 from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP

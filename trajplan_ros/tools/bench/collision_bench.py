@@ -1,14 +1,13 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The ``trajplan bench-collisions`` subcommand: the targets of issue 29, measured.
+The ``trajplan bench-collisions`` subcommand: the collision targets, measured.
 
 For each arm (the SO-101, UR5, xArm7 and Panda of example-robot-data, and the paper's arm) it
 draws scenes with a fresh seed: a table under the base and 1 to ``--obstacles`` boxes, spheres
 and cylinders around the arm, none within the padding of the arm at its start, and goals (the
 tool point of random joint angles, outside every obstacle). Each goal is planned three ways:
-without any check (the plan of before issue 29), with the arm's own links only, and with the
-scene. Then:
+without any check, with the arm's own links only, and with the scene. Then:
 
 * never a collision: every plan that succeeds is sampled every millisecond and checked by
   python-fcl on the real shapes (``clearance.IndependentCheck``), which must find every pair
@@ -34,17 +33,17 @@ import time
 
 import numpy as np
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAULT_PADDING
+from trajplan_ros.collision.free_motion import check_motion, START_TOLERANCE, StartLimits
 from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.planning.free_motion import (check_motion, project, START_TOLERANCE,
-                                               StartLimits)
-from trajplan_ros.planning.motion_profile import MotionProfile, Timing
-from trajplan_ros.planning.objective import Objective
+from trajplan_ros.motion.motion_profile import MotionProfile, Timing
+from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
-from trajplan_ros.planning.polish import polish
-from trajplan_ros.planning.trajectory import motion_states
+from trajplan_ros.search.free_goal import project_onto_goal
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.polish import polish
 from trajplan_ros.tools.arguments import positive_count
 from trajplan_ros.tools.bench.clearance import IndependentCheck
 from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
@@ -144,7 +143,7 @@ def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega
     obj = Objective(bench.arm, goal, bench.start, omega=omega)
     law = MotionProfile().time_law(bench.arm, omega)
     rng = np.random.default_rng(12345)
-    projected = project(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
+    projected = project_onto_goal(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(*obj.tool(x)) <= 1e-6]
     limits = StartLimits.at(world, bench.start)
@@ -229,7 +228,7 @@ def _report(rows: list[Row]) -> str:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan bench-collisions``."""
-    p = sub.add_parser('bench-collisions', help='measure the collision targets (issue 29)',
+    p = sub.add_parser('bench-collisions', help='measure the collision targets',
                        description=__doc__.split('\n\n')[0].strip())
     p.add_argument('--arms', nargs='+', default=['so101', 'ur5', 'panda', 'paper'],
                    choices=sorted(STARTS))

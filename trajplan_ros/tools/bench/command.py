@@ -28,9 +28,9 @@ import sys
 from typing import Sequence
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import prepare
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
                                           arm_from_arguments, motion_from_arguments,
                                           positive_count, UsageError)

@@ -26,10 +26,10 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.fuzzy import RewardPunishment
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode, Objective
+from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import ALGORITHMS, plan, PlanResult
+from trajplan_ros.search.fuzzy import RewardPunishment
+from trajplan_ros.search.objective import Mode, Objective
 
 __all__ = ['Answer', 'Method', 'METHODS', 'ITERATIONS', 'PARTICLES', 'PYSWARMS_OPTIONS',
            'load', 'pyswarms_logging']

@@ -14,10 +14,10 @@ from typing import Sequence
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.fuzzy import RewardPunishment
-from trajplan_ros.planning.objective import DEFAULT_OMEGA, Mode, Objective
-from trajplan_ros.planning.paper_experiment import PAPER_TABLE5, PAPER_TARGET
+from trajplan_ros.search.fuzzy import RewardPunishment
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, Objective
 from trajplan_ros.tools.bench.cases import Case
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TABLE5, PAPER_TARGET
 from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCESS_ERROR,
                                              SUCCESS_GAP)
 

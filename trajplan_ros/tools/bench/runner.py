@@ -21,9 +21,9 @@ from typing import Callable, Sequence
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.objective import Mode, Objective
+from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import PlanResult
+from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.tools.bench.cases import Case
 from trajplan_ros.tools.bench.methods import Answer, Method
 

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.time_law import motion_times, TimeLaw
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.time_law import motion_times, TimeLaw
 
 __all__ = ['ExactOptimum', 'exact_minimum', 'radial_angle']
 

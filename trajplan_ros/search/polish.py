@@ -52,11 +52,11 @@ import numpy as np
 
 from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
-from trajplan_ros.planning.active_set import minimax_step
-from trajplan_ros.planning.linearisation import (line_searches, linearise, minimum_norm_steps,
-                                                 residuals_and_jacobians)
-from trajplan_ros.planning.objective import errors_eq11, Objective, Problem
-from trajplan_ros.planning.time_law import tie_scales
+from trajplan_ros.motion.time_law import tie_scales
+from trajplan_ros.search.active_set import minimax_step
+from trajplan_ros.search.linearisation import (line_searches, linearise, minimum_norm_steps,
+                                               residuals_and_jacobians)
+from trajplan_ros.search.objective import errors_eq11, Objective, Problem
 
 __all__ = ['EarlyStop', 'Linearisation', 'NEVER', 'agreeing', 'early_stop', 'linearise_at',
            'polish', 'polish_step', 'settle', 'trial_points']

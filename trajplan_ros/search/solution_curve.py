@@ -12,8 +12,8 @@ neighbourhood, and a swarm can miss a component whose basin is small. ``curve_se
 them all:
 
 1. probes: the answer and points drawn uniformly inside the limits, each moved onto the
-   solution set by Newton steps (``project``); a component whose basin under these steps holds
-   a fraction f of the joint space is missed with probability (1 - f)^probes;
+   solution set by Newton steps (``project_onto_curves``); a component whose basin under these
+   steps holds a fraction f of the joint space is missed with probability (1 - f)^probes;
 2. every probe's curve is followed both ways, straight through the limits (``follow``), all in
    one vectorised walk;
 3. the seeds are the samples where the motion time is no larger than at their neighbours, among
@@ -38,14 +38,14 @@ import numpy as np
 
 from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
-from trajplan_ros.planning.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
-                                                 residuals_and_jacobians, solution_model)
-from trajplan_ros.planning.objective import errors_eq11, Objective, Problem
-from trajplan_ros.planning.time_law import joint_time, TimeLaw
+from trajplan_ros.motion.time_law import joint_time, TimeLaw
+from trajplan_ros.search.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
+                                               residuals_and_jacobians, solution_model)
+from trajplan_ros.search.objective import errors_eq11, Objective, Problem
 
 __all__ = ['curve_constraint', 'curve_keys', 'curve_seeds', 'distinct', 'distinct_by_spacing',
            'follow', 'limit_crossings', 'lowest_time', 'neighbours', 'newton_steps',
-           'points_on_curves', 'project', 'seeds_on_curves', 'snap_to_limits', 'trace',
+           'points_on_curves', 'project_onto_curves', 'seeds_on_curves', 'snap_to_limits', 'trace',
            'wrap_into']
 
 
@@ -79,7 +79,7 @@ def wrap_into(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
 
 @kernel
 def newton_steps(curve: Problem, x: np.ndarray, steps: int) -> np.ndarray:
-    """Return x (K, m) after ``steps`` minimum-norm Newton steps, wrapped (``project``)."""
+    """Return x (K, m) after ``steps`` minimum-norm Newton steps, wrapped (see the caller)."""
     x = x.copy()
     unbounded = np.full(x.shape[0], np.inf)
     for _ in range(steps):
@@ -137,7 +137,7 @@ def trace(curve: Problem, x: np.ndarray, step: np.ndarray, steps: int) -> np.nda
     return out
 
 
-def project(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
+def project_onto_curves(curve: Objective, x: np.ndarray, steps: int = 2) -> np.ndarray:
     """
     Return x (K, planned) moved towards the solutions of ``curve`` by minimum-norm Newton steps.
 
@@ -230,7 +230,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     them. Points outside the limits or farther than 5e-2 of the reach from the solutions (the
     points moved onto the limits can be that far) are NaN.
     """
-    along = follow(curve, project(curve, probes), step, steps)              # (K, S, planned)
+    along = follow(curve, project_onto_curves(curve, probes), step, steps)     # (K, S, planned)
     return _Walk(*points_on_curves(curve.problem, along))
 
 

@@ -22,7 +22,7 @@ joint_trajectory_controller fits one polynomial per segment between points, exac
 phase boundary falls inside. So every phase lasts a whole number of nanoseconds: each rise
 phase is rounded up, the cruise fills the duration (rounded up, or the common end when
 synchronized), and v_p, a_p and j are then recomputed from d for those times. Every phase is
-at least as long as before, so the limits still hold (a stretched profile is first solved
+at least as long as unrounded, so the limits still hold (a stretched profile is first solved
 for 8 ns less than its end, the most the rounding can add). With the rules of
 ``joint_profiles`` (a common end ``SLACK_NS`` after the slowest joint's fastest, phases under
 ``SHORTEST_NS`` folded into others) that rounding adds at most about 0.8 µs.

@@ -92,11 +92,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.planning.objective import Evaluation, Objective
-from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
-                                            OptimizeResult)
-from trajplan_ros.planning.polish import agreeing, EarlyStop, polish as polish_candidates, settle
-from trajplan_ros.planning.solution_curve import curve_constraint, curve_seeds, project
+from trajplan_ros.search.objective import Evaluation, Objective
+from trajplan_ros.search.optimize import (asked, History, initial_population, Interrupt,
+                                          OptimizeResult)
+from trajplan_ros.search.polish import agreeing, EarlyStop, polish as polish_candidates, settle
+from trajplan_ros.search.solution_curve import curve_constraint, curve_seeds, project_onto_curves
 
 __all__ = ['iepso', 'FREE_DEFAULTS', 'RADIAL_DEFAULTS']
 
@@ -109,29 +109,17 @@ FREE_DEFAULTS = {'swarms': 8, 'polish_count': 2, 'polish_steps': 6}
 RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 
 
-#: The multi-start (``_multistart``, ``_by_multistart``): probes polished
-#: per ``curve_search`` point, probes drawn per probe polished, the error (in arm reaches) up
-#: to which a projected probe counts as on the goal in that screening, the first polish's trust
-#: radius (rad), and how many of the fastest polished probes are polished further, for how
-#: many steps; ``ROUND_TRUST``: the trust radius (rad) of the swarms' candidates there, the
-#: polish round's. The multi-start takes the place of the polish round (it used to follow
-#: one): the swarms' candidates join its first polish. ``MULTISTART_PRUNED``: after that many
-#: steps of the first polish only that many candidates (of least merit) go on;
-#: ``MULTISTART_VERTEX_STEPS``: its first steps try only the vertex sets of the SQP step
-#: (``polish``). On 1920 free-mode dev goals (SO-101, UR5, Panda, xArm7) and on six hard UR5
-#: goals planned with 9 seeds each (seed 728): the version with the round missed 7 goals and
-#: 4 of 54; without it 9 and 4, at 22 ms median on the SO-101 and UR5 and 54 ms on the Panda;
-#: with pruning to 24 after 10 steps and 3 vertex steps also 9 and 4, at 21 and 44 ms.
-#: Pruning after 6 steps and 4 vertex steps (17 and 30 ms) missed 11 goals and 16 of 54;
-#: pruning after 6 steps alone 10 of 54, 4 vertex steps alone 8. ``FINISH_NEAR``: the error
-#: (in arm reaches) up to which a polished probe may be finished: the fastest within it go on,
-#: on the goal or not yet (a probe still converging after the first polish, the fastest but
-#: 1e-3 m off the goal, was the only one to reach a UR5 goal's optimum, 26 % faster than the
-#: minimum the four finished ones, all on the goal, shared); the finish ends early like a
-#: polish round (``_polish_is_enough``). On 600 UR5 dev goals from random starts (seed 560)
-#: that missed 3 goals instead of 5 (against the best of three other plan seeds), at the
-#: same median and a p99 of 22 instead of 36 ms; 400 SO-101 and 400 Panda goals missed the
-#: same 3 each.
+#: The multi-start (``_multistart``, ``_by_multistart``): ``WIDE_PROBES`` probes polished per
+#: ``curve_search`` point, ``SCREENED`` probes drawn per probe polished, ``SCREEN_ERROR`` the
+#: error (in arm reaches) up to which a projected probe counts as on the goal in that
+#: screening, ``WIDE_TRUST`` the first polish's trust radius (rad); the ``FINISHED`` fastest
+#: polished probes within ``FINISH_NEAR`` (arm reaches) of the goal, on it or still converging,
+#: are polished for ``FINISH_STEPS`` more (a probe 1e-3 m off the goal can be the only one in
+#: the optimum's basin). ``ROUND_TRUST``: the trust radius (rad) of the swarms' candidates,
+#: which join the first polish. ``MULTISTART_PRUNED``: after that many steps of the first
+#: polish only that many candidates (of least merit) go on; ``MULTISTART_VERTEX_STEPS``: its
+#: first steps try only the vertex sets of the SQP step (``polish``). The measurements behind
+#: these values: doc/benchmarks.md, "How the search's settings were chosen".
 WIDE_PROBES = 3
 SCREENED = 3
 SCREEN_ERROR = 1e-6
@@ -464,18 +452,13 @@ def _by_multistart(obj: Objective) -> bool:
 
     Where the curve search does not serve alone: on isolated points in free mode (one to
     three planned joints), where a swarm lands on the fastest less surely than a multi-start
-    Newton search from many probes (on a planar two-joint arm the swarms missed the faster of
-    two solutions near a straight elbow on 1 of 300 goals, the multi-start on none); on sets
-    of two or more dimensions (free mode on five to seven, radial on seven), which have no
-    curve to follow; and, beside the curve search, on the longer curves of six planned joints
-    (radial mode). There the walk along the curves alone
-    missed a faster stretch on 12 of 300 Panda dev goals (2 with a walk three times as long,
-    at 34 ms), the multi-start alone an optimum on a joint limit on 4 of 150 (the walk's seeds
-    include the limits), both together on 1 of 150 (31 ms). Radial goals on four or five
-    planned joints have isolated solutions too, but they lie on the curves of fewer
-    constraints (``curve_constraint``), which the curve search follows: on the UR5 the
-    multi-start missed the fastest of its eight solutions on 1 of 50 goals (seed 735; on 6 of
-    10 plan seeds), whose basin held 1 % of its probes; the curves found it every time.
+    Newton search from many probes; on sets of two or more dimensions (free mode on five to
+    seven, radial on seven), which have no curve to follow; and, beside the curve search, on
+    the longer curves of six planned joints (radial mode), where a walk along the curves alone
+    can miss a faster stretch. Radial goals on four or five planned joints have isolated
+    solutions too, but they lie on the curves of fewer constraints (``curve_constraint``),
+    which the curve search follows. Measurements: doc/benchmarks.md, "How the search's
+    settings were chosen".
     """
     if obj.radial:
         return obj.arm.planned >= 6
@@ -515,7 +498,7 @@ def _multistart(obj: Objective, bests: np.ndarray, probes: np.ndarray, steps: in
     ``MULTISTART_VERTEX_STEPS``; the batch cut near the end, ``MULTISTART_PRUNED``), then the
     ``FINISHED`` fastest near the goal (``FINISH_NEAR``) up to ``FINISH_STEPS`` steps more.
     """
-    projected = np.clip(project(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
+    projected = np.clip(project_onto_curves(obj, probes, PROJECT_STEPS), obj.lower, obj.upper)
     ev = obj(projected)
     keep = np.lexsort((ev.motion_time, ev.error > SCREEN_ERROR * obj.arm.reach))
     start = np.clip(obj.planned_start, obj.lower, obj.upper)

@@ -16,7 +16,7 @@ the node's parameters of the same names all build one.
   velocity, as Ruckig's time synchronisation; under ``servo`` a straight line in joint space).
 
 Limits come from where ROS keeps them. Velocity: the URDF's ``<limit velocity>``, capped by the
-servo angular velocity (``angular_velocity``), as before. Acceleration and jerk: a
+servo angular velocity (``angular_velocity``). Acceleration and jerk: a
 ``joint_limits.yaml`` in MoveIt's format (``read_joint_limits``), which also overrides the
 URDF's velocity where it sets one; then ``max_acceleration`` / ``max_jerk`` for every joint
 without its own. A profile that needs a limit no source gives is refused, naming the joint.
@@ -31,7 +31,7 @@ from typing import Any, Mapping
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel
-from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw, TRAPEZOIDAL
+from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TimeLaw, TRAPEZOIDAL
 import yaml
 
 __all__ = ['JointLimits', 'MotionProfile', 'Profile', 'Timing', 'read_joint_limits']

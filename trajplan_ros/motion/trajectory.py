@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.rest_to_rest import (GAP_NS, joint_profiles, JointProfiles,
-                                                SMALLEST_TURN)
-from trajplan_ros.planning.time_law import JERK_LIMITED, SERVO, TimeLaw
+from trajplan_ros.motion.motion_profile import Timing
+from trajplan_ros.motion.rest_to_rest import (GAP_NS, joint_profiles, JointProfiles,
+                                              SMALLEST_TURN)
+from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TimeLaw
 
 __all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory',
            'servo_trajectory', 'trajectory_points']

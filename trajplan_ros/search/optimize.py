@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from trajplan_ros.planning.objective import Objective
+from trajplan_ros.search.objective import Objective
 
 __all__ = ['OptimizeResult', 'History', 'Interrupt', 'asked', 'initial_population']
 

@@ -1,9 +1,9 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Collision-free direct motions (issue 29): the continuous check and the search for the fastest.
+The continuous check of a direct motion against the arm's links and the scene.
 
-The check (``check_motion``) follows the swept motion under the plan's profile and timing on a
+``check_motion`` follows the swept motion under the plan's profile and timing on a
 grid of instants fine enough that no point of any link moves by more than ``GRID_SWEEP`` from
 one to the next. Every joint of a rest-to-rest motion turns one way only, so between instants
 t_k and t the links of pair p come closer by at most b_p(t) - b_p(t_k), with
@@ -11,18 +11,13 @@ b_p(t) = sum_j |q_j(t) - q_j(0)| sweep[p, j] (``CollisionWorld.sweep``: the fart
 either link from joint j's axis). A pair is checked at t_k, then next at the last instant
 before that bound reaches its clearance less the padding: so at every instant of the motion,
 not only the checked ones, every pair keeps the padding. The clearance at a checked instant is
-first bounded below by the spheres (``collision.spheres``); a pair whose spheres leave less
-than one grid step is decided exactly by coal, with the padding plus that step as margin.
+first bounded below by the spheres (``collision.spheres``), then by the convex hulls
+(``collision.convex``); a pair they leave less than one grid step is decided exactly by coal,
+with the padding plus that step as margin.
 
 A pair already within the padding at the start (or in contact) is held to its start clearance
 less ``START_TOLERANCE`` instead: the motion may leave, not come closer (by more than the
 check's resolution).
-
-The search (``free_joint_goal``) is the direct method's own: the goal has a whole set of joint
-solutions, and among them it takes the fastest whose motion is free. It checks the optimiser's
-answer first; when that collides it projects random joint vectors onto the goal's solutions,
-polishes copies of them to local minima of the motion time, checks them fastest first, and
-moves the best free one towards faster colliding ones by bisection along the solutions.
 """
 from __future__ import annotations
 
@@ -35,14 +30,11 @@ from trajplan_ros.collision.convex import pair_convex_bounds
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.spheres import pair_lower_bounds
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.planning.motion_profile import Timing
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.polish import Linearisation, polish
-from trajplan_ros.planning.time_law import motion_times, TimeLaw
-from trajplan_ros.planning.trajectory import motion_states
+from trajplan_ros.motion.motion_profile import Timing
+from trajplan_ros.motion.time_law import motion_times, TimeLaw
+from trajplan_ros.motion.trajectory import motion_states
 
-__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'free_joint_goal', 'project',
-           'SearchOutcome', 'START_TOLERANCE', 'StartLimits']
+__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'START_TOLERANCE', 'StartLimits']
 
 #: Most any link point moves between two instants of the grid (m).
 GRID_SWEEP = 1e-3
@@ -50,17 +42,6 @@ GRID_SWEEP = 1e-3
 MAX_GRID = 20_000
 #: How much closer (m) a pair within the padding at the start may come: the check's resolution.
 START_TOLERANCE = 2 * GRID_SWEEP
-#: Random joint vectors the search projects onto the goal's solutions in one round (a goal's
-#: free solutions can be few, and a redundant arm's solutions many).
-SAMPLES = 192
-#: Newton steps of that projection.
-PROJECTION_STEPS = 12
-#: Bisection steps from the best free candidate towards a faster colliding one.
-BISECTIONS = 6
-#: A bisection step is checked only where it would shorten the best motion by this share.
-GAIN = 2e-3
-#: Candidate joint goals closer than this in every joint (rad) are one.
-SAME_GOAL = 1e-4
 #: Most piece pairs noted at one instant for coal to measure (more: coal measures the pairs).
 FOUND_ROWS = 4096
 
@@ -153,7 +134,7 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
         if bad.size:
             p = which[bad[0]]
             return Clearance(False, float(value[bad[0]]), world.describe(p), float(t[k]), within)
-        settle(moved, which, k, value, limit, due, least)
+        write_next_checks(moved, which, k, value, limit, due, least)
         k = int(due.min())
     return Clearance(True, float(least[0]), world.describe(int(least[1])), float(t[int(least[2])]),
                      within)
@@ -190,10 +171,10 @@ def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray,
     clearance so far or within ``margin`` of this instant's least) gets the larger bound of
     its convex sets (``convex.body_bound``: the link's hull, then its shapes'; for a possible
     least, the shapes' always). While none comes within a grid step of its limit they are
-    settled (``settle``) and the check moves on to the next instant due. Returns that instant
-    (len(q): every instant is checked), the pairs due there, their bounds, how far each may come
-    closer by the next instant, which of them coal must decide (the triangles), and the link
-    poses. Without convex sets (none given) the spheres alone bound them.
+    scheduled (``write_next_checks``) and the check moves on to the next instant due. Returns
+    that instant (len(q): every instant is checked), the pairs due there, their bounds, how far
+    each may come closer by the next instant, which of them coal must decide (the triangles),
+    and the link poses. Without convex sets (none given) the spheres alone bound them.
     """
     centres, radii, first, kinds, dims, inverse = spheres
     last = len(q) - 1
@@ -218,7 +199,7 @@ def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray,
             for r in range(len(rows)):
                 rows[r, 0] = asked[int(rows[r, 0])]
             return k, which, value, step, near, poses, rows, count[0] <= len(found)
-        settle(moved, which, k, value, limit, due, least)
+        write_next_checks(moved, which, k, value, limit, due, least)
         k = np.min(due)
     nothing = np.empty(0)
     return (len(q), np.empty(0, np.int64), nothing, nothing, np.empty(0, np.bool_),
@@ -239,9 +220,13 @@ def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
 
 
 @kernel
-def settle(moved: np.ndarray, which: np.ndarray, k: int, value: np.ndarray, limit: np.ndarray,
-           due: np.ndarray, least: np.ndarray) -> None:
-    """Schedule pairs ``which`` clear by ``value`` at instant k (``next_checks``); keep least."""
+def write_next_checks(moved: np.ndarray, which: np.ndarray, k: int, value: np.ndarray,
+                      limit: np.ndarray, due: np.ndarray, least: np.ndarray) -> None:
+    """
+    Write into ``due`` when pairs ``which``, clear by ``value`` at instant k, are next checked.
+
+    ``next_checks`` gives the instants; ``least`` (clearance, pair, instant) keeps the least.
+    """
     due[which] = next_checks(moved, which, k, value - limit[which])
     n = np.argmin(value)
     if value[n] < least[0]:
@@ -306,134 +291,3 @@ def _clearances(world: CollisionWorld, poses: np.ndarray, which: np.ndarray) -> 
     if near.size:
         out[near] = world.bounded(poses, which[near], np.full(near.size, world.padding))[0]
     return out
-
-
-@dataclass(frozen=True)
-class SearchOutcome:
-    """The search's choice: planned joint angles x (None: no free motion found) and why."""
-
-    x: np.ndarray | None
-    clearance: Clearance          # the chosen motion's, or the blocked first candidate's
-    checked: int                  # motions checked
-
-
-def project(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STEPS) -> np.ndarray:
-    """Return joint vectors x (K, m) after Newton steps onto the goal's solutions."""
-    for _ in range(steps):
-        here = Linearisation(obj, x, 1.0, newton_only=True)
-        x = np.clip(x + here.newton(here.c), obj.lower, obj.upper)
-    return x
-
-
-def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
-    """
-    Return reached joint goals, fastest first: random ones projected, and those polished.
-
-    Polished copies often end at one local minimum: of goals within ``SAME_GOAL`` (rad) of each
-    other in every joint only the fastest is kept (their motions are the same to the check).
-    """
-    projected = project(obj, rng.uniform(obj.lower, obj.upper, (SAMPLES, obj.arm.planned)))
-    x = np.vstack((projected, polish(obj, projected)))
-    x = x[obj.errors(*obj.tool(x)) <= tolerance]
-    x = x[np.argsort(obj.motion_time(x), kind='stable')]
-    _, first = np.unique(np.round(x / SAME_GOAL), axis=0, return_index=True)
-    return x[np.sort(first)]
-
-
-def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
-                    x0: np.ndarray, rng: np.random.Generator, tolerance: float
-                    ) -> SearchOutcome:
-    """
-    Return the fastest joint goal found whose motion from the start is free (see the module).
-
-    ``x0``: the optimiser's answer (planned joints), checked first; ``law``: the whole arm's
-    time law; ``tolerance``: the largest error (m) of a reached goal.
-    """
-    limits = StartLimits.at(world, obj.start)
-
-    def check(x: np.ndarray) -> Clearance:
-        return check_motion(world, obj.start, obj.full(x)[0], law, timing, True, limits)
-
-    first = check(x0)
-    if first.free:
-        return SearchOutcome(x0, first, 1)
-    checked, colliding, best = 1, [x0], None
-    for _ in range(_rounds(obj)):
-        found, spent = _first_free(obj, check, _candidates(obj, rng, tolerance), best, colliding)
-        checked += spent
-        if found is None and best is not None:
-            break
-        best = found or best
-    if best is None:
-        return SearchOutcome(None, first, checked)
-    colliding.sort(key=lambda x: _time(obj, x))
-    for target in colliding[:3]:
-        best, spent = _bisect(obj, check, best, target, tolerance)
-        checked += spent
-    return SearchOutcome(best[0], best[1], checked)
-
-
-def _rounds(obj: Objective) -> int:
-    """
-    Return the most rounds of candidates: one per free direction of the solutions past two.
-
-    ``SAMPLES`` vectors cover a solution set of two dimensions (a 5-joint arm's positions);
-    each further dimension gets a round more. A round follows only while the last one found a
-    faster free motion, or none has been found yet.
-    """
-    return max(1, obj.null_directions - 1)
-
-
-def _first_free(obj: Objective, check, candidates: np.ndarray,
-                best: tuple[np.ndarray, Clearance] | None, colliding: list[np.ndarray]
-                ) -> tuple[tuple[np.ndarray, Clearance] | None, int]:
-    """
-    Return the first free motion among candidates (fastest first) faster than ``best``.
-
-    Only candidates that would shorten ``best`` by ``GAIN`` are checked; the colliding ones
-    are added to ``colliding``. Also returns the motions checked.
-    """
-    if best is not None:
-        candidates = candidates[obj.motion_time(candidates) < (1.0 - GAIN) * _time(obj, best[0])]
-    for n, x in enumerate(candidates):
-        clearance = check(x)
-        if clearance.free:
-            return (x, clearance), n + 1
-        colliding.append(x)
-    return None, len(candidates)
-
-
-def _time(obj: Objective, x: np.ndarray) -> float:
-    """Return the motion time to joint goal x (planned joints)."""
-    return float(obj.motion_time(x[None])[0])
-
-
-def _bisect(obj: Objective, check, free: tuple[np.ndarray, Clearance], blocked: np.ndarray,
-            tolerance: float) -> tuple[tuple[np.ndarray, Clearance], int]:
-    """
-    Return the fastest free point found between ``free`` and ``blocked`` on the solutions.
-
-    Each step takes the (projected) middle of what is left: checked, it moves the search
-    towards ``blocked`` where free and away where not; a middle that would not shorten the best
-    motion by ``GAIN`` is not checked (the search moves on towards ``blocked``). The search
-    ends once the nearest blocked point is no faster than that. Also returns the motions
-    checked.
-    """
-    low, high, best, spent = 0.0, 1.0, free, 0
-    best_time, high_time = _time(obj, free[0]), _time(obj, blocked)
-    for _ in range(BISECTIONS):
-        if high_time > (1.0 - GAIN) * best_time:
-            break
-        middle = 0.5 * (low + high)
-        x = project(obj, ((1.0 - middle) * free[0] + middle * blocked)[None])[0]
-        if _time(obj, x) > (1.0 - GAIN) * best_time:
-            low = middle
-            continue
-        clearance = check(x) if obj.errors(*obj.tool(x[None]))[0] <= tolerance else None
-        spent += clearance is not None
-        if clearance is not None and clearance.free:
-            low = middle
-            best, best_time = (x, clearance), _time(obj, x)
-        else:
-            high, high_time = middle, _time(obj, x)
-    return best, spent

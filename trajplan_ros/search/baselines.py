@@ -22,9 +22,9 @@ from typing import Callable
 
 import numpy as np
 
-from trajplan_ros.planning.objective import Objective
-from trajplan_ros.planning.optimize import (asked, History, initial_population, Interrupt,
-                                            OptimizeResult)
+from trajplan_ros.search.objective import Objective
+from trajplan_ros.search.optimize import (asked, History, initial_population, Interrupt,
+                                          OptimizeResult)
 
 __all__ = ['pso', 'spso', 'ga', 'de']
 

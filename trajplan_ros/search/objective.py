@@ -35,9 +35,9 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
 from trajplan_ros.kinematics.forward import Chain, tool_rows
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.planning.fuzzy import RewardPunishment, shaping_eq9
-from trajplan_ros.planning.motion_profile import MotionProfile
-from trajplan_ros.planning.time_law import motion_times, TimeLaw
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.time_law import motion_times, TimeLaw
+from trajplan_ros.search.fuzzy import RewardPunishment, shaping_eq9
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
            'goal_ray_basis']

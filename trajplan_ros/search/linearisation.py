@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
-from trajplan_ros.planning.time_law import joint_time, TimeLaw
+from trajplan_ros.motion.time_law import joint_time, TimeLaw
 
 __all__ = ['line_minimax', 'line_searches', 'linearise', 'minimum_norm_steps', 'solution_model']
 
