@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from trajplan_ros import DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
+from trajplan_ros import ArmModel, DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
 from trajplan_ros.planning import planner
 from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
 from trajplan_ros.search.iepso import iepso
@@ -32,9 +32,15 @@ def test_paper_example_succeeds_with_the_exact_optimum():
     assert result.position_error_m <= 1e-9
     assert result.motion_time_s == pytest.approx(4.514270, rel=1e-3)
     assert result.joint_goal.shape == (5,)
-    traj = result.trajectory(paper_arm())
+    traj = result.trajectory()                 # the result knows its arm's joints and limits
     np.testing.assert_allclose(traj.positions[-1], result.joint_goal)
     assert traj.duration == pytest.approx(result.motion_time_s)
+    assert traj.joint_names == paper_arm().joint_names
+    np.testing.assert_array_equal(result.trajectory(paper_arm()).positions, traj.positions)
+    other = ArmModel.from_dh(np.full(5, 0.1), np.zeros(5), np.zeros(5), lower=np.full(5, -3),
+                             upper=np.full(5, 3), joint_names=[f'other{i}' for i in range(5)])
+    with pytest.raises(ValueError, match='the plan is for joints'):
+        result.trajectory(other)
 
 
 def test_to_dict_of_a_succeeded_plan_carries_its_values():
@@ -76,7 +82,7 @@ def test_bad_requests_are_rejected_with_a_reason(goal, start):
     assert result.joint_goal is None and result.message
     assert '\n' not in result.message
     with pytest.raises(ValueError):
-        result.trajectory(paper_arm())
+        result.trajectory()
     json.dumps(result.to_dict(), allow_nan=False)
 
 

@@ -6,7 +6,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from trajplan_ros.motion.trajectory import servo_trajectory
+from trajplan_ros.motion.motion_profile import Timing
+from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TimeLaw, TRAPEZOIDAL
+from trajplan_ros.motion.trajectory import motion_states, motion_trajectory, servo_trajectory
 from trajplan_ros.planning import trajectory_points
 
 START = np.array([0.0, 0.5, -0.2, 0.1, 0.0])
@@ -37,11 +39,35 @@ def test_every_joint_turns_at_omega_until_it_arrives():
         assert np.min(np.abs(traj.times - t)) < 1e-9      # corners are sampled exactly
 
 
-def test_sample_interpolates_from_the_start():
+def test_at_time_interpolates_from_the_start():
     traj = servo_trajectory(START, GOAL, OMEGA)
     after_one_second = START + np.sign(GOAL - START) * np.minimum(OMEGA, np.abs(GOAL - START))
-    np.testing.assert_allclose(traj.sample(np.array([0.0, 1.0, 100.0])),
+    np.testing.assert_allclose(traj.at_time(np.array([0.0, 1.0, 100.0]))[0],
                                [START, after_one_second, GOAL], atol=1e-12)
+
+
+@pytest.mark.parametrize('kind', [SERVO, TRAPEZOIDAL, JERK_LIMITED])
+@pytest.mark.parametrize('timing', list(Timing))
+def test_at_time_is_the_motion_for_every_law(kind: int, timing: Timing) -> None:
+    # between points the polynomial the controller fits is the law's own motion: the same
+    # positions, velocities and accelerations as the profile's closed form, to rounding
+    rng = np.random.default_rng(17 + kind)
+    for _ in range(40):
+        n = 4
+        law = TimeLaw(kind, 10 ** rng.uniform(-1, 1, n),
+                      10 ** rng.uniform(-1, 1.5, n) if kind != SERVO else np.full(n, np.inf),
+                      10 ** rng.uniform(0, 2.5, n) if kind == JERK_LIMITED else np.full(n, np.inf))
+        start, goal = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
+        traj = motion_trajectory(start, goal, law, timing, sample_period=0.1)
+        t = np.concatenate((rng.uniform(0, traj.duration, 200), traj.times, [traj.duration + 1]))
+        q, v, a = traj.at_time(t)
+        exact_q, exact_v, exact_a, _ = motion_states(start, goal, law, timing, t)
+        assert np.abs(q - exact_q).max() <= 1e-8
+        assert np.abs(v - exact_v).max() <= 1e-6 * law.velocity.max()
+        if kind != SERVO:
+            assert np.abs(a - exact_a).max() <= 1e-6 * law.acceleration.max()
+        np.testing.assert_array_equal(q[-1], goal)
+        assert not v[-1].any() and not a[-1].any()
 
 
 def test_no_motion_gives_one_resting_point():

@@ -71,16 +71,40 @@ class Trajectory:
         """Return each point's time_from_start in whole nanoseconds."""
         return np.round(self.times * 1e9).astype(np.int64).tolist()
 
-    def sample(self, t: np.ndarray) -> np.ndarray:
+    def at_time(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
-        Return positions at times t (clamped to [0, duration]), linear between points.
+        Return positions, velocities and accelerations at times t (s), each (len(t), n_joints).
 
-        That is the servo motion exactly; a profile's motion is ``motion_states``'s.
+        Exact for every law, as Ruckig's ``at_time``: between two points the polynomial that
+        joint_trajectory_controller fits through what they carry, from the start at rest:
+        linear through positions alone (the servo motion), cubic with velocities (a
+        trapezoidal phase is a parabola), quintic with accelerations (a jerk-limited phase is
+        a cubic); every phase boundary is a point. Before 0 the start, after the end the last
+        point, at rest.
         """
-        t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        n = len(self.start)
         times = np.concatenate(([0.0], self.times))
-        pos = np.vstack((self.start, self.positions))
-        return np.stack([np.interp(t, times, pos[:, j]) for j in range(pos.shape[1])], axis=-1)
+        rest = np.zeros((1, n))
+        q = np.vstack((self.start, self.positions))
+        v = None if self.velocities is None else np.vstack((rest, self.velocities))
+        a = None if self.accelerations is None else np.vstack((rest, self.accelerations))
+        k = np.clip(np.searchsorted(times, t, side='right') - 1, 0, len(times) - 2)
+        h = (times[k + 1] - times[k])[:, None]
+        x = (np.clip(t, 0.0, self.duration) - times[k])[:, None]
+        coefficients = _segment_polynomials(q[k], q[k + 1], h,
+                                            None if v is None else (v[k], v[k + 1]),
+                                            None if a is None else (a[k], a[k + 1]))
+        position = sum(c * x ** p for p, c in enumerate(coefficients))
+        velocity = sum(p * c * x ** (p - 1) for p, c in enumerate(coefficients) if p > 0)
+        acceleration = sum(p * (p - 1) * c * x ** (p - 2)
+                           for p, c in enumerate(coefficients) if p > 1)
+        moving = ((t >= 0.0) & (t < self.duration))[:, None]
+        position = np.where((t >= self.duration)[:, None], self.positions[-1], position)
+        return (np.where((t <= 0.0)[:, None], self.start, position),
+                np.where(moving, velocity, 0.0),
+                np.where(moving, acceleration, 0.0) if len(coefficients) > 2
+                else np.zeros_like(position))
 
     def to_dict(self) -> dict[str, Any]:
         """
@@ -100,6 +124,31 @@ class Trajectory:
                    'accelerations': fields['accelerations'][k]}
                   for k, ns in enumerate(self.nanoseconds)]
         return {'joint_names': list(self.joint_names), 'points': points}
+
+
+def _segment_polynomials(q0: np.ndarray, q1: np.ndarray, h: np.ndarray,
+                         velocities: tuple[np.ndarray, np.ndarray] | None,
+                         accelerations: tuple[np.ndarray, np.ndarray] | None
+                         ) -> list[np.ndarray]:
+    """
+    Return the coefficients c_0, c_1, ... of each segment's polynomial in its own time, (S, n).
+
+    Linear, cubic or quintic Hermite interpolation of the ends' positions, velocities and
+    accelerations over the segment's duration h (S, 1), as joint_trajectory_controller fits.
+    """
+    d = q1 - q0
+    if velocities is None:
+        return [q0, d / h]
+    v0, v1 = velocities
+    if accelerations is None:
+        return [q0, v0, (3.0 * d - (2.0 * v0 + v1) * h) / h ** 2,
+                (-2.0 * d + (v0 + v1) * h) / h ** 3]
+    a0, a1 = accelerations
+    return [q0, v0, 0.5 * a0,
+            (20.0 * d - (8.0 * v1 + 12.0 * v0) * h - (3.0 * a0 - a1) * h ** 2) / (2.0 * h ** 3),
+            (-30.0 * d + (14.0 * v1 + 16.0 * v0) * h + (3.0 * a0 - 2.0 * a1) * h ** 2)
+            / (2.0 * h ** 4),
+            (12.0 * d - 6.0 * (v1 + v0) * h - (a0 - a1) * h ** 2) / (2.0 * h ** 5)]
 
 
 def _motion(start: np.ndarray, goal: np.ndarray, omega: float | np.ndarray,

@@ -30,6 +30,7 @@ from trajplan_ros.collision.free_motion import sphere_pass, write_next_checks
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
 from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.motion.trajectory import motion_points, motion_trajectory, Trajectory
 from trajplan_ros.search.baselines import de, ga, pso, spso
 from trajplan_ros.search.free_goal import free_joint_goal
@@ -91,6 +92,8 @@ class PlanResult:
     profile: MotionProfile = field(default_factory=MotionProfile)
     clearance_m: float = float('nan')             # least clearance of the motion (collisions)
     clearance_pair: str = ''                      # where it occurs
+    joint_names: tuple[str, ...] = ()             # the arm's, in the trajectory's order
+    law: TimeLaw | None = field(default=None, repr=False)   # the whole arm's, for its motion
     history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     history_error: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
 
@@ -99,20 +102,28 @@ class PlanResult:
         """Return True when the goal was reached within the tolerance."""
         return self.status is PlanStatus.SUCCEEDED
 
-    def trajectory(self, arm: ArmModel, sample_period: float = 0.1) -> Trajectory:
-        """Return the joint trajectory from the start to the joint goal under ``profile``."""
-        if self.joint_goal is None or self.start is None:
-            raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
-        return motion_trajectory(self.start, self.joint_goal,
-                                 self.profile.time_law(arm, self.omega), self.profile.timing,
-                                 sample_period=sample_period, joint_names=arm.joint_names)
+    def trajectory(self, arm: ArmModel | None = None, sample_period: float = 0.1) -> Trajectory:
+        """
+        Return the joint trajectory from the start to the joint goal under ``profile``.
 
-    def trajectory_points(self, arm: ArmModel, sample_period: float = 0.1) -> int:
+        The result knows its arm's joints and limits; ``arm`` (optional) is checked against it.
+        """
+        law = self._law(arm)
+        return motion_trajectory(self.start, self.joint_goal, law, self.profile.timing,
+                                 sample_period=sample_period, joint_names=self.joint_names)
+
+    def trajectory_points(self, arm: ArmModel | None = None, sample_period: float = 0.1) -> int:
         """Return how many points ``trajectory`` has, without building a long one."""
-        if self.joint_goal is None or self.start is None:
+        return motion_points(self.start, self.joint_goal, self._law(arm), self.profile.timing,
+                             sample_period)
+
+    def _law(self, arm: ArmModel | None) -> TimeLaw:
+        """Return the motion's time law; refuse a plan without a motion, or another arm."""
+        if self.joint_goal is None or self.start is None or self.law is None:
             raise ValueError(f'no trajectory for a {self.status.value} plan: {self.message}')
-        return motion_points(self.start, self.joint_goal, self.profile.time_law(arm, self.omega),
-                             self.profile.timing, sample_period)
+        if arm is not None and tuple(arm.joint_names) != tuple(self.joint_names):
+            raise ValueError(f'the plan is for joints {self.joint_names}, not {arm.joint_names}')
+        return self.law
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-ready summary (the ``trajplan plan --json`` line); NaN becomes None."""
@@ -184,14 +195,14 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     _check_settings(algorithm, (tolerance, axis_tolerance), max_planning_time, stop)
     clock, interrupt = time.perf_counter(), _interrupt(max_planning_time, stop)
     goal_arr = np.asarray(goal, dtype=float).ravel()
-    start_arr = np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
     profile = profile if profile is not None else MotionProfile()
     common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega),
               'profile': profile}
     try:
-        obj = Objective(arm, goal_arr, start_arr, mode=mode, omega=omega, shaping=shaping,
-                        profile=profile)
+        obj = Objective(arm, goal_arr, _start_angles(arm, start), mode=mode, omega=omega,
+                        shaping=shaping, profile=profile)
         _check_world(world, arm, obj.goal)
+        common.update(joint_names=tuple(arm.joint_names), law=profile.time_law(arm, omega))
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
@@ -201,6 +212,11 @@ def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
     if world is None or not result.success:
         return result
     return _collision_free(result, obj, world, seed, tolerance, clock)
+
+
+def _start_angles(arm: ArmModel, start: Sequence[float] | None) -> np.ndarray:
+    """Return the start as an array of joint angles: the upright pose q = 0 when None."""
+    return np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
 
 
 def _check_world(world: CollisionWorld | None, arm: ArmModel, goal: np.ndarray) -> None:

@@ -80,14 +80,14 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
         return Outcome(False, _refusal(where, result, took), result.status.value,
                        result.message, plan_time_s=timed,
                        timed_out=result.status is PlanStatus.TIMED_OUT, clearance=clearance)
-    points = result.trajectory_points(s.arm, s.sample_period)
+    points = result.trajectory_points(sample_period=s.sample_period)
     if points > s.max_trajectory_points:
         reason = (f'the trajectory would need {points} points, more than '
                   f'max_trajectory_points {s.max_trajectory_points} (motion '
                   f'{result.motion_time_s:.3f} s at sample_period {s.sample_period:g} s)')
         return Outcome(False, f'{where}: refused: {reason}; {took}', 'refused', reason,
                        plan_time_s=timed)
-    traj = result.trajectory(s.arm, s.sample_period)
+    traj = result.trajectory(sample_period=s.sample_period)
     path = path_msg(s.arm, traj, header) if job.is_call else None
     return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,

@@ -166,9 +166,10 @@ def _record(result: PlanResult, line: int | None, arm: ArmModel,
     if args.trajectory:
         record['trajectory'] = None
         if result.success:
-            points = result.trajectory_points(arm, args.sample_period)
+            period = args.sample_period
+            points = result.trajectory_points(sample_period=period)
             if points <= args.max_trajectory_points:
-                record['trajectory'] = result.trajectory(arm, args.sample_period).to_dict()
+                record['trajectory'] = result.trajectory(sample_period=period).to_dict()
             else:
                 record['message'] += (f'; no trajectory: it would need {points} points, more '
                                       f'than --max-trajectory-points {args.max_trajectory_points}')

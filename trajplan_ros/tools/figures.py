@@ -121,9 +121,9 @@ def _plot_joints(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> No
     axes = fig.subplots(2, 2, sharex=True).ravel()
     for name, plan in plans.items():
         colour, style = _STYLE[name]
-        traj = plan.trajectory(arm)
+        traj = plan.trajectory()
         t = np.linspace(0.0, traj.duration, 400)
-        q = traj.sample(t)
+        q = traj.at_time(t)[0]
         for j, ax in enumerate(axes):
             ax.plot(t, q[:, j], color=colour, ls=style,
                     label=f'{_LABELS[name]} ({traj.duration:.2f} s)')
@@ -160,11 +160,11 @@ def _plot_arm(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> None:
     ax.plot(*joints.T, 'o-', color='grey', lw=3, label='start (q = 0)')
     for name, plan in plans.items():
         colour, style = _STYLE[name]
-        traj = plan.trajectory(arm)
-        path = arm.tool(traj.sample(np.linspace(0.0, traj.duration, 200)))[0]
+        traj = plan.trajectory()
+        path = arm.tool(traj.at_time(np.linspace(0.0, traj.duration, 200))[0])[0]
         ax.plot(*path.T, color=colour, ls=style, lw=1.5, label=f'tool path, {_LABELS[name]}')
         if name == 'iepso':
-            for q in traj.sample(np.linspace(0.0, traj.duration, 6)[1:-1]):
+            for q in traj.at_time(np.linspace(0.0, traj.duration, 6)[1:-1])[0]:
                 ax.plot(*arm.frames(q)[0, :, :3, 3].T, '-', color=colour, lw=1, alpha=0.25)
             ax.plot(*arm.frames(plan.joint_goal)[0, :, :3, 3].T, 'o-', color=colour, lw=3,
                     label=f'goal pose, {_LABELS[name]}')

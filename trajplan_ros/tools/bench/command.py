@@ -41,9 +41,9 @@ from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
-                                             format_paper_heading, format_sets, format_summary,
-                                             summarise,
-                                             write_plans_csv, write_summary_csv)
+                                             format_paper_heading, format_sameness, format_sets,
+                                             format_summary, summarise, write_plans_csv,
+                                             write_summary_csv)
 from trajplan_ros.tools.bench.runner import Results, run
 
 __all__ = ['add_parser']
@@ -195,6 +195,8 @@ def _report(args: argparse.Namespace, results: dict[str, Results], cases: Sequen
     if args.sets > 1:
         print(format_sets(results, cases) + '\n')
     print(format_failures(results, cases, args.failures))
+    if args.baseline:
+        print(format_sameness(results))
     if args.csv:
         write_summary_csv(args.csv, rows)
     if args.plans_csv:
@@ -234,6 +236,8 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
             results = run_chain(methods, cases, arm, mode, fk, step=bar.update,
                                 profile=args.motion)
     print(format_chain(results, cases))
+    if args.baseline:
+        print(format_sameness(results))
     for note in notes:
         print(note)
     return 0

@@ -23,7 +23,7 @@ from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCES
 
 __all__ = ['Summary', 'summarise', 'format_criteria', 'format_failures', 'format_goals_heading',
            'format_paper', 'format_paper_heading', 'format_sets', 'format_summary',
-           'format_table', 'write_plans_csv', 'write_summary_csv']
+           'format_sameness', 'format_table', 'write_plans_csv', 'write_summary_csv']
 
 
 @dataclass(frozen=True)
@@ -233,3 +233,27 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
                                  r.axis_error[k], r.motion_time[k], case.exact_time, r.gap[k],
                                  r.efficiency[k],
                                  r.seconds[k], bool(r.success[k])])
+
+
+def format_sameness(results: dict) -> str:
+    """
+    Return how the baseline's plans compare with IEPSO's, goal by goal.
+
+    The joint goals bit for bit, and the largest difference of a joint angle and (where the
+    results have it) of the motion time: a change that should change no plan (a move of code,
+    a rename) must show all, 0 and 0.
+    """
+    if 'iepso' not in results or 'baseline' not in results:
+        return 'baseline: compared with iepso only (add iepso to --algorithms)'
+    ours, theirs = results['iepso'], results['baseline']
+    mine, other = (getattr(ours, 'x', None), getattr(theirs, 'x', None))
+    if mine is None:
+        mine, other = ours.q, theirs.q
+    same = np.all(mine == other, axis=1)
+    angle = float(np.nanmax(np.abs(mine - other), initial=0.0))
+    line = (f'baseline: the same joint goals bit for bit on {int(same.sum())} of {len(same)} '
+            f'goals; largest joint difference {angle:.3g} rad')
+    if hasattr(ours, 'motion_time'):
+        difference = np.abs(ours.motion_time - theirs.motion_time)
+        line += f', largest motion time difference {float(np.nanmax(difference)):.3g} s'
+    return line
