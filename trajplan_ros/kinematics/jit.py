@@ -33,6 +33,7 @@ import functools
 import hashlib
 from importlib import metadata
 import logging
+import os
 from pathlib import Path
 import time
 from typing import Any, Callable
@@ -48,7 +49,7 @@ _LOG = logging.getLogger('trajplan_ros')
 CORE = tuple(Path(__file__).resolve().parents[1] / name
              for name in ('kinematics', 'motion', 'collision', 'search', 'planning'))
 #: How long compiling every kernel takes (doc/benchmarks.md: the first start).
-FIRST_COMPILE = 'about a minute on two idle cores, longer on a busy machine'
+FIRST_COMPILE = 'about four minutes on two idle cores, longer on a busy machine'
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
@@ -63,13 +64,48 @@ def _version() -> str:
 
 @functools.lru_cache(maxsize=None)
 def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
-    """Return a hash of the package version and of the code of every ``.py`` file in folders."""
+    """
+    Return a hash of the package version and of the code of every ``.py`` file in folders.
+
+    Parsing the core takes a few hundred milliseconds, so the result is kept in a small file
+    named by a hash of the files' bytes (which determine it) beside the kernels' cache, and
+    read from there by later processes.
+    """
+    raw = hashlib.sha256(_version().encode())
+    for name, path in _sources(folders):
+        raw.update(name.encode())
+        raw.update(path.read_bytes())
+    memo = _memo_folder() / f'trajplan_core_stamp_{raw.hexdigest()[:32]}'
+    try:
+        kept = memo.read_text(encoding='ascii')
+        if len(kept) == 64:
+            return kept
+    except (OSError, UnicodeDecodeError):
+        pass
     digest = hashlib.sha256(_version().encode())
-    for folder in folders:
-        for path in sorted(folder.rglob('*.py')):
-            digest.update(str(path.relative_to(folder.parent)).encode())
-            digest.update(_code(path).encode())
-    return digest.hexdigest()
+    for name, path in _sources(folders):
+        digest.update(name.encode())
+        digest.update(_code(path).encode())
+    stamp = digest.hexdigest()
+    try:                                     # whole or not at all: another process may read
+        memo.parent.mkdir(parents=True, exist_ok=True)
+        part = memo.with_name(f'{memo.name}.{os.getpid()}')
+        part.write_text(stamp, encoding='ascii')
+        os.replace(part, memo)
+    except OSError:                          # nowhere to keep it: parsed again next time
+        pass
+    return stamp
+
+
+def _sources(folders: tuple[Path, ...]) -> list[tuple[str, Path]]:
+    """Return every ``.py`` file under ``folders`` with its name there, in a fixed order."""
+    return [(str(path.relative_to(folder.parent)), path)
+            for folder in folders for path in sorted(folder.rglob('*.py'))]
+
+
+def _memo_folder() -> Path:
+    """Return where ``core_stamp`` keeps its result: the kernels' cache folder if one is set."""
+    return Path(numba.config.CACHE_DIR or CORE[0].parent / '__pycache__')
 
 
 def _code(path: Path) -> str:
