@@ -371,7 +371,7 @@ def _placed(convexes: tuple, c: int, body_pose: np.ndarray, out: np.ndarray) -> 
     out[3, 3] = 1.0
 
 
-@inlined_kernel
+@kernel
 def convex_bound(convexes: tuple, one: int, one_pose: np.ndarray, other: int,
                  other_pose: np.ndarray) -> float:
     """
@@ -413,7 +413,7 @@ def _note(found: np.ndarray, count: np.ndarray, pair: int, one: int, other: int,
     count[0] += 1
 
 
-@inlined_kernel
+@kernel
 def _shape_bound(convexes: tuple, i: int, a_pose: np.ndarray, j: int, b_pose: np.ndarray,
                  bound: float, need: float, pair: int, found: np.ndarray,
                  count: np.ndarray) -> float:
@@ -465,7 +465,7 @@ def _shape_bound(convexes: tuple, i: int, a_pose: np.ndarray, j: int, b_pose: np
     return max(bound, least)
 
 
-@inlined_kernel
+@kernel
 def body_bound(convexes: tuple, a: int, a_pose: np.ndarray, b: int, b_pose: np.ndarray,
                need: float, tight: bool, pair: int, found: np.ndarray,
                count: np.ndarray) -> float:
