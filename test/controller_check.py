@@ -49,8 +49,8 @@ def planned(name: str, count: int, seed: int) -> None:
     for k in range(count):
         q, start = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
         label, profile = pairs[k % len(pairs)]
-        result = plan(arm.tool(q[None])[0][0], start, arm=arm, omega=100.0, profile=profile,
-                      seed=k)
+        result = plan(arm.tool(q[None])[0][0], start, arm=arm, angular_velocity=100.0,
+                      motion=profile, seed=k)
         if not result.success:
             continue
         done[label] += 1

@@ -256,6 +256,8 @@ print(before == (list(root.handlers), root.level), os.listdir())
 def test_pyswarms_import_and_run_write_nothing_in_a_fresh_process(tmp_path: Path) -> None:
     env = {k: v for k, v in os.environ.items() if k != 'LOG_CFG'}
     env['PYTHONPATH'] = str(Path(__file__).resolve().parents[1])     # this tree's package
+    if env.get('NUMBA_CACHE_DIR'):                 # the kernels' cache, not in the new folder
+        env['NUMBA_CACHE_DIR'] = os.path.abspath(env['NUMBA_CACHE_DIR'])
     done = subprocess.run([sys.executable, '-c', _FRESH_PYSWARMS], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300, check=True)
     guarded, unguarded = done.stdout.splitlines()

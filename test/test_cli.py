@@ -170,7 +170,7 @@ def test_angular_velocity_sets_the_servo_speed(capsys):
     fast = json.loads(capsys.readouterr().out)
     assert fast['motion_time_s'] == pytest.approx(slow['motion_time_s'] * 0.2, rel=1e-9)
     assert main(['plan', *TARGET, '--angular-velocity', '0']) == 2
-    assert 'must be positive' in capsys.readouterr().err
+    assert 'angular_velocity must be finite and positive' in capsys.readouterr().err
 
 
 def test_trajectory_is_the_message_as_published(capsys):

@@ -267,7 +267,7 @@ def test_the_controller_never_turns_a_joint_faster_than_its_speed(case: str) -> 
     succeeded, ratios = 0, []
     for k in range(goals):
         goal = arm.tool(q[k:k + 1])[0][0]
-        result = plan(goal, starts[k] if k % 2 else None, arm=arm, omega=omega, seed=k)
+        result = plan(goal, starts[k] if k % 2 else None, arm=arm, angular_velocity=omega, seed=k)
         if not result.success:
             continue
         succeeded += 1
@@ -279,7 +279,7 @@ def test_the_controller_never_turns_a_joint_faster_than_its_speed(case: str) -> 
 def test_the_published_message_is_the_one_checked() -> None:
     arm = paper_arm()
     goal = arm.tool(np.array([[0.4, 0.6, -0.9, 0.3, 0.2]]))[0][0]
-    result = plan(goal, [0.1, -0.2, 0.3, 0.0, 0.5], arm=arm, omega=0.2, seed=0)
+    result = plan(goal, [0.1, -0.2, 0.3, 0.0, 0.5], arm=arm, angular_velocity=0.2, seed=0)
     assert result.success
     traj = result.trajectory(arm, sample_period=0.1)
     msg = trajectory_msg(traj)

@@ -130,7 +130,7 @@ def test_a_mesh_arm_plans_around_an_obstacle_by_the_triangles_with_no_new_kernel
     start = np.zeros(arm.n_joints)
     goal = arm.tool(np.array([[1.2, 1.0, 0.9]]))[0][0]
     free = plan(goal, start, arm=arm, seed=4)
-    law = MotionProfile().time_law(arm, free.omega)
+    law = MotionProfile().time_law(arm, free.angular_velocity)
     middle = motion_states(start, free.joint_goal, law, Timing.INDEPENDENT,
                            np.array([0.5 * free.motion_time_s]))[0][0]
     on_the_way = arm.tool(middle[None])[0][0]                        # where the tool passes

@@ -76,6 +76,9 @@ def test_kernels_call_only_kernels_of_the_core() -> None:
         for name, value in inspect.getclosurevars(k.py_func).globals.items():
             if hasattr(value, 'py_func'):                          # a kernel that it calls
                 assert value in kernels(), (k, name)
+            elif isinstance(value, type) and issubclass(value, tuple):    # a record it builds
+                assert hasattr(value, '_fields') and value.__module__.startswith(
+                    'trajplan_ros.'), (k, name)
             elif not isinstance(value, (int, float, tuple, np.ndarray)):
                 assert value is np, (k, name)
 

@@ -43,7 +43,7 @@ def test_linearisation_matches_numpy(name: str) -> None:
     obj = objective(name)
     rng = np.random.default_rng(3)
     x = rng.uniform(obj.lower, obj.upper, (12, obj.arm.planned))
-    here = Linearisation(obj, x, 7.0)
+    here = Linearisation.at(obj, x, 7.0)
     c = residuals(obj, x)
     np.testing.assert_allclose(here.c, c, rtol=0, atol=1e-15)
     np.testing.assert_allclose(here.time, obj.motion_time(x), rtol=1e-15)
@@ -83,7 +83,7 @@ def test_linearisation_matches_numpy(name: str) -> None:
 def test_newton_only_leaves_the_null_space_out():
     obj = objective(NAMES[0])
     x = np.random.default_rng(4).uniform(obj.lower, obj.upper, (5, obj.arm.planned))
-    full, newton = Linearisation(obj, x, 1.0), Linearisation(obj, x, 1.0, newton_only=True)
+    full, newton = Linearisation.at(obj, x, 1.0), Linearisation.at(obj, x, 1.0, newton_only=True)
     assert newton.null.shape == (5, 0, 4) and newton.quad.shape == (5, 0, 0, 4)
     np.testing.assert_array_equal(newton.pinv, full.pinv)
     np.testing.assert_allclose(newton.newton(newton.c),

@@ -113,7 +113,7 @@ def test_a_profile_without_the_limits_it_needs_is_refused_naming_the_joint(
     with pytest.raises(ValueError, match='jerk limit for joint joint1'):
         MotionProfile('jerk_limited', max_acceleration=1.0).time_law(paper_arm(), 0.2)
     with pytest.raises(ValueError, match='needs a jerk limit'):                # plan() too
-        plan([0.15, 0.19, 0.17], profile=MotionProfile('jerk_limited', max_acceleration=1.0))
+        plan([0.15, 0.19, 0.17], motion=MotionProfile('jerk_limited', max_acceleration=1.0))
 
 
 def test_limits_of_a_joint_the_arm_does_not_have_are_refused() -> None:
@@ -148,7 +148,7 @@ def test_the_installed_example_limits_are_read_and_planned_with() -> None:
     assert sorted(limits) == list(paper_arm().joint_names)
     for name in ('trapezoidal', 'jerk_limited'):
         profile = MotionProfile.from_file(example, profile=name, timing='synchronized')
-        result = plan([0.151171, 0.19162, 0.172124], profile=profile, seed=1)
+        result = plan([0.151171, 0.19162, 0.172124], motion=profile, seed=1)
         assert result.success, result.message
         law = profile.time_law(paper_arm(), 0.2)
         slowest = max(joint_time(law, i, abs(result.joint_goal[i])) for i in range(4))

@@ -9,7 +9,8 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from trajplan_ros import ArmModel, DEFAULT_TOLERANCE, paper_arm, plan, PlanStatus
+from trajplan_ros import (ArmModel, DEFAULT_TOLERANCE, MotionProfile, paper_arm, plan,
+                          PlanRequest, PlanStatus)
 from trajplan_ros.planning import planner
 from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
 from trajplan_ros.search.iepso import iepso
@@ -101,12 +102,53 @@ def test_tolerance_decides_success():
 
 @pytest.mark.parametrize('algorithm', ['pso', 'spso', 'ga', 'de'])
 def test_comparison_algorithms_are_chosen_by_name(algorithm):
-    result = plan(TARGET, algorithm=algorithm, seed=0, max_iter=60)
+    result = plan(TARGET, algorithm=algorithm, seed=0, max_iterations=60)
     assert result.algorithm == algorithm
     direct = ALGORITHMS[algorithm](Objective(paper_arm(), PAPER_TARGET, np.zeros(5)),
                                    max_iter=60, seed=0)
     assert result.joint_goal[:4].tobytes() == direct.x.tobytes()
     assert result.iterations == direct.nit and result.evaluations == direct.nfev
+
+
+def test_a_request_plans_as_the_same_keywords_do() -> None:
+    request = PlanRequest(TARGET, [0.1] * 5, angular_velocity=0.5, seed=3, max_iterations=200)
+    by_keywords = plan(TARGET, [0.1] * 5, angular_velocity=0.5, seed=3, max_iterations=200)
+    by_request = plan(request)
+    assert by_request.joint_goal.tobytes() == by_keywords.joint_goal.tobytes()
+    assert (by_request.angular_velocity, by_request.motion) == (0.5, MotionProfile())
+    # the earlier names of the keywords still work, and give the same plan
+    old = plan(TARGET, [0.1] * 5, omega=0.5, seed=3, max_iter=200, profile=MotionProfile())
+    assert old.joint_goal.tobytes() == by_request.joint_goal.tobytes()
+    assert (old.omega, old.profile) == (old.angular_velocity, old.motion)
+
+
+def test_a_request_is_checked_with_one_line_reasons() -> None:
+    good = PlanRequest(TARGET)
+    good.validate()
+    for change, reason in [
+            ({'algorithm': 'annealing'}, "unknown algorithm 'annealing'; choose from iepso"),
+            ({'angular_velocity': 0.0}, 'angular_velocity must be finite and positive'),
+            ({'tolerance': float('nan')}, 'tolerance must be finite and positive'),
+            ({'max_planning_time': -1.0}, 'max_planning_time must be finite and positive'),
+            ({'convergence_precision': -1e-9}, 'convergence_precision must be finite and not'),
+            ({'population': 1}, 'population must be an integer of at least 2, got 1'),
+            ({'max_iterations': 2.5}, 'max_iterations must be an integer of at least 1'),
+            ({'seed': -3}, 'seed must be None, an integer >= 0 or a numpy Generator'),
+            ({'optimizer_options': {'swarm': 4}}, 'iepso has no option swarm; it takes '),
+            ({'algorithm': 'de', 'optimizer_options': {'swarms': 4}}, 'de has no option swarms'),
+            ({'motion': MotionProfile('trapezoidal')}, 'acceleration')]:
+        with pytest.raises(ValueError, match=reason):
+            good.replace(**change).validate()
+        with pytest.raises(ValueError, match=reason):
+            plan(good.replace(**change))
+    with pytest.raises(ValueError, match="mode must be one of free, radial, got 'sideways'"):
+        PlanRequest(TARGET, mode='sideways')
+    with pytest.raises(TypeError, match='unknown setting.* omeg; a plan takes algorithm'):
+        plan(TARGET, omeg=1.0)
+    with pytest.raises(TypeError, match='give angular_velocity or its old name omega'):
+        plan(TARGET, omega=1.0, angular_velocity=1.0)
+    with pytest.raises(TypeError, match='in the PlanRequest, not beside it'):
+        plan(good, seed=1)
 
 
 def test_bad_settings_raise():
@@ -146,7 +188,7 @@ def same_search(a, b) -> bool:
     (TARGET, 'iepso', 'free'), (TARGET, 'iepso', 'radial'), (FAR, 'iepso', 'free'),
     (TARGET, 'pso', 'free'), (TARGET, 'de', 'radial')])
 def test_a_deadline_and_a_stop_that_never_fire_change_nothing(goal, algorithm, mode):
-    settings = {'algorithm': algorithm, 'mode': mode, 'seed': 1, 'max_iter': 200}
+    settings = {'algorithm': algorithm, 'mode': mode, 'seed': 1, 'max_iterations': 200}
     alone = plan(goal, **settings)
     asked = plan(goal, max_planning_time=1000.0, stop=lambda: False, **settings)
     assert same_search(alone, asked)                              # bit for bit
@@ -321,7 +363,8 @@ def test_a_stopped_panda_plan_ends_at_once_even_inside_the_multistart() -> None:
     q = rng.uniform(np.maximum(arm.lower, -3), np.minimum(arm.upper, 3), (2, arm.n_joints))
     goal, start = arm.tool(q[:1])[0][0], q[1]
     polls: list[float] = []
-    whole = plan(goal, start, arm=arm, omega=1.0, seed=0, stop=lambda: polls.append(0) or False)
+    whole = plan(goal, start, arm=arm, angular_velocity=1.0, seed=0,
+                 stop=lambda: polls.append(0) or False)
     assert whole.success and len(polls) > 10                  # polls inside the multi-start
     for first in (2, len(polls) // 2):
         asked: list[float] = []
@@ -330,7 +373,7 @@ def test_a_stopped_panda_plan_ends_at_once_even_inside_the_multistart() -> None:
             asked.append(time.perf_counter())
             return len(asked) >= first
 
-        result = plan(goal, start, arm=arm, omega=1.0, seed=0, stop=stop)
+        result = plan(goal, start, arm=arm, angular_velocity=1.0, seed=0, stop=stop)
         ended = time.perf_counter()
         assert result.status is PlanStatus.CANCELLED
         assert len(asked) <= first + 3                        # the stages after it ask once each

@@ -42,8 +42,8 @@ def test_planned_motions_keep_every_limit_under_the_controller(name: str) -> Non
     q, starts = rng.uniform(arm.lower, arm.upper, (2, 16, arm.n_joints))
     for k in range(16):             # the planner's answers: joints often tie at R
         profile = list(profiles(name).values())[k % 4]
-        result = plan(arm.tool(q[k:k + 1])[0][0], starts[k], arm=arm, omega=100.0,
-                      profile=profile, seed=k)
+        result = plan(arm.tool(q[k:k + 1])[0][0], starts[k], arm=arm, angular_velocity=100.0,
+                      motion=profile, seed=k)
         assert result.success, result.message
         law = profile.time_law(arm, 100.0)
         assert result.motion_time_s == pytest.approx(

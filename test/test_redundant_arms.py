@@ -233,7 +233,7 @@ def test_pruned_candidates_stop_where_they_are_and_the_best_go_on(name: str) -> 
     obj = drawn_goal(arm, rng)
     x0 = rng.uniform(obj.lower, obj.upper, (6, obj.arm.planned))
     after = polish(obj, x0, max_steps=2, trust=1.5)
-    merit = Linearisation(obj, after, 1e3 / arm.reach).merit         # the polish's merit
+    merit = Linearisation.at(obj, after, 1e3 / arm.reach).merit         # the polish's merit
     best = np.sort(np.argsort(merit)[:2])
     pruned = polish(obj, x0, max_steps=8, trust=1.5, prune=(2, 2))
     rest = np.setdiff1d(np.arange(6), best)

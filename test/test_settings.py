@@ -62,8 +62,8 @@ def test_defaults_give_the_paper_arm() -> None:
     for key in ('rotations', 'translations', 'base', 'sign', 'offset', 'lower', 'upper'):
         np.testing.assert_array_equal(getattr(settings.arm, key), getattr(arm, key))
     assert settings.arm.joint_names == arm.joint_names
-    assert (settings.omega, settings.mode, settings.algorithm, settings.seed) == (
-        0.2, 'free', 'iepso', 0)
+    r = settings.request
+    assert (r.angular_velocity, r.mode, r.algorithm, r.seed) == (0.2, 'free', 'iepso', 0)
     np.testing.assert_array_equal(settings.start, np.zeros(5))
 
 
@@ -92,7 +92,7 @@ def test_bad_values_are_refused_with_the_reason(change, error, reason) -> None:
 
 
 def test_seed_minus_one_means_a_fresh_seed() -> None:
-    assert Settings.from_parameters({**default_values(), 'seed': -1}).seed is None
+    assert Settings.from_parameters({**default_values(), 'seed': -1}).request.seed is None
 
 
 def test_start_positions_may_give_the_planned_joints_only() -> None:
@@ -127,15 +127,16 @@ def test_the_motion_comes_from_its_parameters_and_the_limits_file(tmp_path: Path
                       '    max_acceleration: 1\n', encoding='utf-8')
     values = {**default_values(), 'profile': 'trapezoidal', 'timing': 'synchronized',
               'joint_limits_file': str(limits), 'max_acceleration': 3.0}
-    profile = Settings.from_parameters(values).profile
+    profile = Settings.from_parameters(values).request.motion
     assert profile.describe() == 'trapezoidal, synchronized'
     law = profile.time_law(paper_arm(), 0.2)
     np.testing.assert_array_equal(law.acceleration, [3.0, 1.0, 3.0, 3.0, 3.0])
-    assert Settings.from_parameters(default_values()).profile.describe() == 'servo, independent'
+    servo = Settings.from_parameters(default_values()).request.motion
+    assert servo.describe() == 'servo, independent'
     # the file is read when the parameter is set: a later change of the file, or its removal,
     # does not refuse an unrelated parameter change
     limits.unlink()
-    assert Settings.from_parameters({**values, 'seed': 5}).profile == profile
+    assert Settings.from_parameters({**values, 'seed': 5}).request.motion == profile
     other = tmp_path / 'other_limits.yaml'
     other.write_text('joint_limits:\n  shoulder:\n    has_jerk_limits: true\n    max_jerk: 1\n',
                      encoding='utf-8')

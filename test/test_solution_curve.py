@@ -57,7 +57,7 @@ def test_radial_solutions_of_five_joints_lie_on_the_curves_the_search_follows() 
     found = x[(obj.errors(p, u) < 1e-10) & obj.arm.within_limits(obj.full(x))]
     solutions = found[np.unique(np.round(found, 4), axis=0, return_index=True)[1]]
     assert len(solutions) >= 4
-    on_curve = Linearisation(curve, solutions, 1.0)
+    on_curve = Linearisation.at(curve, solutions, 1.0)
     assert np.all(np.abs(on_curve.c) < 1e-9) and on_curve.null.shape[1] == 1
     fastest = obj.motion_time(solutions).min()
     for seed in range(4):

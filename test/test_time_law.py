@@ -43,9 +43,9 @@ def test_every_motion_time_of_the_core_comes_from_the_objectives_law() -> None:
     expected = np.max(np.abs(x) / obj.law.velocity, axis=1)
     np.testing.assert_allclose(obj.motion_time(x), expected, rtol=1e-15)
     np.testing.assert_allclose(obj(x).motion_time, expected, rtol=1e-15)
-    np.testing.assert_allclose(linearise_at(obj.problem, x, 1.0, 1)[1], expected, rtol=1e-15)
+    np.testing.assert_allclose(linearise_at(obj.problem, x, 1.0, 1).time, expected, rtol=1e-15)
     faster = obj.problem._replace(law=servo_law(2 * obj.law.velocity))
-    np.testing.assert_allclose(linearise_at(faster, x, 1.0, 1)[1], expected / 2, rtol=1e-15)
+    np.testing.assert_allclose(linearise_at(faster, x, 1.0, 1).time, expected / 2, rtol=1e-15)
     assert obj.longest_time == np.max((obj.upper - obj.lower) / obj.law.velocity)
 
 

@@ -22,6 +22,7 @@ import functools
 import logging
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf, to_axis
 import yourdfpy
 
-__all__ = ['ArmGeometry', 'LinkGeometry', 'poses_at']
+__all__ = ['ArmGeometry', 'LinkFrames', 'LinkGeometry', 'poses_at']
 
 _LOG = logging.getLogger('trajplan_ros')
 
@@ -106,15 +107,28 @@ class ArmGeometry:
     def link_poses(self, q: np.ndarray) -> np.ndarray:
         """Return every link's pose at joint angles q (N, n_joints), (N, links, 4, 4)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        return np.stack([poses_at(*self.kernel_arrays, row) for row in q])
+        return np.stack([poses_at(self.frames, row) for row in q])
 
     @functools.cached_property
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """Return what ``poses_at`` takes before the joint angles."""
+    def frames(self) -> LinkFrames:
+        """Return the chain and where each link sits on it, as ``poses_at`` takes them."""
         arm = self.arm
-        return (arm.base, arm.rotations, arm.translations, arm.sign, arm.offset, self._align,
-                np.array([link.joint for link in self.links], dtype=np.int64),
-                np.stack([link.attachment for link in self.links]))
+        return LinkFrames(arm.base, arm.rotations, arm.translations, arm.sign, arm.offset,
+                          self._align, np.array([link.joint for link in self.links], np.int64),
+                          np.stack([link.attachment for link in self.links]))
+
+
+class LinkFrames(NamedTuple):
+    """The chain (``ArmModel``'s arrays) and its links' places on it, for ``poses_at``."""
+
+    base: np.ndarray             # (4, 4) B = F_0: the first joint's frame, before its turn
+    rotations: np.ndarray        # (n, 3, 3) L_k's rotations
+    translations: np.ndarray     # (n, 3) L_k's translations
+    sign: np.ndarray             # (n,) theta_k = sign_k q_k + offset_k
+    offset: np.ndarray           # (n,)
+    align: np.ndarray            # (n, 4, 4) A_k^T: joint k's child frame from its turned frame
+    joint: np.ndarray            # (links,) the joint that moves each link (-1: the base)
+    attachment: np.ndarray       # (links, 4, 4) each link's frame in its joint's child frame
 
 
 @inlined_kernel
@@ -129,9 +143,7 @@ def _product(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
 
 
 @kernel
-def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
-             sign: np.ndarray, offset: np.ndarray, align: np.ndarray, joint: np.ndarray,
-             attachment: np.ndarray, q: np.ndarray) -> np.ndarray:
+def poses_at(frames: LinkFrames, q: np.ndarray) -> np.ndarray:
     """
     Return every link's pose (links, 4, 4) at joint angles q (n,).
 
@@ -139,6 +151,9 @@ def poses_at(base: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
     F_{k+1} = F_k Rz(theta_k) L_k (``ArmModel``); link l's pose is its joint's child frame (or
     the base frame, joint -1) times its attachment.
     """
+    base, sign, offset, align = frames.base, frames.sign, frames.offset, frames.align
+    rotations, translations = frames.rotations, frames.translations
+    joint, attachment = frames.joint, frames.attachment
     n = len(q)
     child = np.empty((n, 4, 4))
     frame = base.copy()

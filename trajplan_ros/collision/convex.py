@@ -20,13 +20,14 @@ body) and its shapes' convex sets.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 
-__all__ = ['BOX', 'CYLINDER', 'ConvexSet', 'POINTS', 'SPHERE', 'body_bound', 'GAP',
-           'pair_convex_bounds']
+__all__ = ['BOX', 'CYLINDER', 'ConvexArrays', 'ConvexSet', 'POINTS', 'SPHERE', 'body_bound',
+           'GAP', 'pair_convex_bounds']
 
 #: Kinds of convex sets (the first three as ``spheres`` numbers the obstacles' kinds).
 BOX, SPHERE, CYLINDER, POINTS = 0, 1, 2, 3
@@ -74,11 +75,9 @@ class ConvexSet:
     origin: np.ndarray
 
     @property
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        """Return the arrays in the kernels' order."""
-        return (self.kinds, self.dims, self.poses, self.first, self.points, self.adjacent_first,
-                self.adjacent, self.climb, self.cover, self.shape_first, self.shapes,
-                self.piece_first, self.pieces, self.centres, self.radii)
+    def arrays(self) -> ConvexArrays:
+        """Return the arrays as the kernels take them."""
+        return ConvexArrays(*(getattr(self, name) for name in ConvexArrays._fields))
 
     @classmethod
     def build(cls, bodies: list[tuple[tuple | None, list[tuple]]]) -> ConvexSet:
@@ -114,6 +113,26 @@ class ConvexSet:
                    centres=np.array(out.centres).reshape(-1, 3),
                    radii=np.array(out.radii, dtype=float),
                    origin=np.array(out.origin, dtype=np.int64).reshape(-1, 3), **ints)
+
+
+class ConvexArrays(NamedTuple):
+    """``ConvexSet``'s arrays as the kernels take them (its docstring says what each holds)."""
+
+    kinds: np.ndarray
+    dims: np.ndarray
+    poses: np.ndarray
+    first: np.ndarray
+    points: np.ndarray
+    adjacent_first: np.ndarray
+    adjacent: np.ndarray
+    climb: np.ndarray
+    cover: np.ndarray
+    shape_first: np.ndarray
+    shapes: np.ndarray
+    piece_first: np.ndarray
+    pieces: np.ndarray
+    centres: np.ndarray
+    radii: np.ndarray
 
 
 class _Lists:
@@ -189,14 +208,15 @@ def _climbs(vertices: np.ndarray, neighbours: list) -> bool:
 
 
 @inlined_kernel
-def _support(convexes: tuple, c: int, pose: np.ndarray, d: np.ndarray, start: int,
+def _support(convexes: ConvexArrays, c: int, pose: np.ndarray, d: np.ndarray, start: int,
              out: np.ndarray) -> int:
     """
     Write the support point of convex ``c`` placed by ``pose`` in world direction d into out.
 
     Returns the vertex found (POINTS: where the next climb starts; ``start`` this one's).
     """
-    kinds, dims, poses, first, points, adjacent_first, adjacent, climb = convexes[:8]
+    kinds, dims, first, points = convexes.kinds, convexes.dims, convexes.first, convexes.points
+    adjacent_first, adjacent, climb = convexes.adjacent_first, convexes.adjacent, convexes.climb
     local = np.empty(3)
     for r in range(3):
         local[r] = pose[0, r] * d[0] + pose[1, r] * d[1] + pose[2, r] * d[2]
@@ -359,9 +379,9 @@ def _nearest(simplex: np.ndarray, n: int, v: np.ndarray) -> int:
 
 
 @inlined_kernel
-def _placed(convexes: tuple, c: int, body_pose: np.ndarray, out: np.ndarray) -> None:
+def _placed(convexes: ConvexArrays, c: int, body_pose: np.ndarray, out: np.ndarray) -> None:
     """Write convex c's pose in the world (its body placed by ``body_pose``) into out."""
-    pose = convexes[2][c]
+    pose = convexes.poses[c]
     for r in range(3):
         for k in range(4):
             out[r, k] = (body_pose[r, 0] * pose[0, k] + body_pose[r, 1] * pose[1, k]
@@ -372,7 +392,7 @@ def _placed(convexes: tuple, c: int, body_pose: np.ndarray, out: np.ndarray) -> 
 
 
 @kernel
-def convex_bound(convexes: tuple, one: int, one_pose: np.ndarray, other: int,
+def convex_bound(convexes: ConvexArrays, one: int, one_pose: np.ndarray, other: int,
                  other_pose: np.ndarray) -> float:
     """
     Return a lower bound of the distance of convex sets ``one`` and ``other`` (placed).
@@ -414,7 +434,7 @@ def _note(found: np.ndarray, count: np.ndarray, pair: int, one: int, other: int,
 
 
 @kernel
-def _shape_bound(convexes: tuple, i: int, a_pose: np.ndarray, j: int, b_pose: np.ndarray,
+def _shape_bound(convexes: ConvexArrays, i: int, a_pose: np.ndarray, j: int, b_pose: np.ndarray,
                  bound: float, need: float, pair: int, found: np.ndarray,
                  count: np.ndarray) -> float:
     """
@@ -426,7 +446,8 @@ def _shape_bound(convexes: tuple, i: int, a_pose: np.ndarray, j: int, b_pose: np
     within ``need`` is noted in ``found`` (``_note``) with their bound, and the least bound of
     all the others as a pair of no pieces (-1, -1).
     """
-    piece_first, pieces, centres, radii = convexes[11], convexes[12], convexes[13], convexes[14]
+    piece_first, pieces = convexes.piece_first, convexes.pieces
+    centres, radii = convexes.centres, convexes.radii
     one = np.arange(piece_first[i], piece_first[i + 1])
     other = np.arange(piece_first[j], piece_first[j + 1])
     if len(one) == 0 and len(other) == 0:
@@ -466,7 +487,7 @@ def _shape_bound(convexes: tuple, i: int, a_pose: np.ndarray, j: int, b_pose: np
 
 
 @kernel
-def body_bound(convexes: tuple, a: int, a_pose: np.ndarray, b: int, b_pose: np.ndarray,
+def body_bound(convexes: ConvexArrays, a: int, a_pose: np.ndarray, b: int, b_pose: np.ndarray,
                need: float, tight: bool, pair: int, found: np.ndarray,
                count: np.ndarray) -> float:
     """
@@ -478,7 +499,7 @@ def body_bound(convexes: tuple, a: int, a_pose: np.ndarray, b: int, b_pose: np.n
     ``pair`` in ``found``; a shape pair left at its hulls is noted as (-1, -1) with their
     bound). Each level's bound is the larger of its own and the level above's.
     """
-    cover, shape_first, shapes = convexes[8], convexes[9], convexes[10]
+    cover, shape_first, shapes = convexes.cover, convexes.shape_first, convexes.shapes
     one, other = np.empty((4, 4)), np.empty((4, 4))
     _placed(convexes, cover[a], a_pose, one)
     _placed(convexes, cover[b], b_pose, other)
@@ -504,8 +525,9 @@ def body_bound(convexes: tuple, a: int, a_pose: np.ndarray, b: int, b_pose: np.n
 
 
 @kernel
-def pair_convex_bounds(convexes: tuple, poses: np.ndarray, pairs: np.ndarray, need: np.ndarray,
-                       tight: np.ndarray, found: np.ndarray, count: np.ndarray) -> np.ndarray:
+def pair_convex_bounds(convexes: ConvexArrays, poses: np.ndarray, pairs: np.ndarray,
+                       need: np.ndarray, tight: np.ndarray, found: np.ndarray,
+                       count: np.ndarray) -> np.ndarray:
     """
     Return ``body_bound`` of each pair (P, 2) of bodies at link poses (links, 4, 4).
 

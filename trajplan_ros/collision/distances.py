@@ -478,12 +478,10 @@ class ArmCollision:
 
     def contacts(self, q: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """Return which link pairs (P, 2) are in contact at each q (N, n_joints), (N, P)."""
-        nothing = (np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4, 4)))
         out = np.zeros((len(q), len(pairs)), dtype=bool)
+        bounds = self.spheres.bounds()
         for n, poses in enumerate(self.geometry.link_poses(q)):
-            near = np.flatnonzero(pair_lower_bounds(
-                poses, self.spheres.centres, self.spheres.radii, self.spheres.first, pairs,
-                *nothing) <= 0.0)
+            near = np.flatnonzero(pair_lower_bounds(poses, bounds, pairs) <= 0.0)
             for p in near:
                 i, j = pairs[p]
                 out[n, p] = _contact(self.bodies[i].placed(poses[i]),
@@ -512,10 +510,12 @@ class CollisionWorld:
         put(self, 'pairs', np.vstack((self.arm.self_pairs,
                                       np.array(world, dtype=np.int64).reshape(-1, 2))))
         shapes = [o.shape for o in self.scene.obstacles]
-        put(self, '_kinds', np.array([SHAPE_KINDS[s.kind] for s in shapes], dtype=np.int64))
-        put(self, '_dims', np.array([s.dimensions + (0.0,) * (3 - len(s.dimensions))
-                                     for s in shapes]).reshape(-1, 3))
-        put(self, '_inverse', np.array([np.linalg.inv(s.pose) for s in shapes]).reshape(-1, 4, 4))
+        #: The links' spheres and the obstacles' primitives, as ``pair_lower_bounds`` takes them.
+        put(self, 'sphere_bounds', self.arm.spheres.bounds(
+            np.array([SHAPE_KINDS[s.kind] for s in shapes], dtype=np.int64),
+            np.array([s.dimensions + (0.0,) * (3 - len(s.dimensions))
+                      for s in shapes]).reshape(-1, 3),
+            np.array([np.linalg.inv(s.pose) for s in shapes]).reshape(-1, 4, 4)))
         put(self, '_obstacles', [Body.of((s,)).placed(np.eye(4)) for s in shapes])
         put(self, 'convexes', ConvexSet.build(
             list(self.arm.convexes)
@@ -541,18 +541,9 @@ class CollisionWorld:
         out[:geometry.links[near].joint + 1] = 0.0
         return out
 
-    @property
-    def bound_arrays(self) -> tuple[np.ndarray, ...]:
-        """Return what ``pair_lower_bounds`` takes besides poses and pairs, in its order."""
-        spheres = self.arm.spheres
-        return (spheres.centres, spheres.radii, spheres.first, self._kinds, self._dims,
-                self._inverse)
-
     def lower_bounds(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return sphere bounds of the distances of pairs ``which`` at link poses (links, 4, 4)."""
-        centres, radii, first, kinds, dims, inverse = self.bound_arrays
-        return pair_lower_bounds(poses, centres, radii, first, self.pairs[which], kinds, dims,
-                                 inverse)
+        return pair_lower_bounds(poses, self.sphere_bounds, self.pairs[which])
 
     def exact(self, poses: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Return coal's distances of pairs ``which`` at link poses (links, 4, 4)."""

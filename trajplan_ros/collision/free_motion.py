@@ -25,10 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trajplan_ros.collision.arm_geometry import poses_at
-from trajplan_ros.collision.convex import pair_convex_bounds
+from trajplan_ros.collision.arm_geometry import LinkFrames, poses_at
+from trajplan_ros.collision.convex import ConvexArrays, pair_convex_bounds
 from trajplan_ros.collision.distances import CollisionWorld
-from trajplan_ros.collision.spheres import pair_lower_bounds
+from trajplan_ros.collision.spheres import pair_lower_bounds, SphereBounds
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.motion.motion_profile import Timing
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
@@ -117,12 +117,12 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
         return Clearance(False, world.padding, world.describe(blocked), float(t[-1]), within)
     moved = np.ascontiguousarray(np.abs(q - start) @ world.sweep.T)     # b_p(t), (M, P)
     margin = 0.0 if exact_clearance else -np.inf
-    chain, spheres = world.arm.geometry.kernel_arrays, world.bound_arrays
+    frames, spheres = world.arm.geometry.frames, world.sphere_bounds
     convexes = world.convexes.arrays
     k = int(due.min())
     while k < len(t):
         k, which, value, step, near, poses, rows, complete = check_pass(
-            chain, spheres, convexes, world.pairs, q, moved, limit, due, k, margin, least)
+            frames, spheres, convexes, world.pairs, q, moved, limit, due, k, margin, least)
         if k == len(t):
             break
         needed = limit[which] + step
@@ -159,14 +159,14 @@ def _clear_by_tables(world: CollisionWorld, q: np.ndarray, limit: np.ndarray, du
 
 
 @kernel
-def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray, q: np.ndarray,
-               moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
-               least: np.ndarray) -> tuple:
+def check_pass(frames: LinkFrames, spheres: SphereBounds, convexes: ConvexArrays,
+               pairs: np.ndarray, q: np.ndarray, moved: np.ndarray, limit: np.ndarray,
+               due: np.ndarray, k: int, margin: float, least: np.ndarray) -> tuple:
     """
     Go on with the check from instant k while the spheres and hulls decide every pair due.
 
     At each instant the pairs due (``due`` <= k) get their sphere bounds at the link poses
-    (``poses_at`` of ``chain``, ``pair_lower_bounds`` of ``spheres``); a pair whose spheres
+    (``poses_at``, ``pair_lower_bounds``); a pair whose spheres
     come within a grid step of its limit (or, with a finite ``margin``, below the least
     clearance so far or within ``margin`` of this instant's least) gets the larger bound of
     its convex sets (``convex.body_bound``: the link's hull, then its shapes'; for a possible
@@ -174,22 +174,20 @@ def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray,
     scheduled (``write_next_checks``) and the check moves on to the next instant due. Returns
     that instant (len(q): every instant is checked), the pairs due there, their bounds, how far
     each may come closer by the next instant, which of them coal must decide (the triangles),
-    and the link poses. Without convex sets (none given) the spheres alone bound them.
+    and the link poses.
     """
-    centres, radii, first, kinds, dims, inverse = spheres
     last = len(q) - 1
     found, count = np.empty((FOUND_ROWS, 4)), np.zeros(1, np.int64)
     while k <= last:
         which = np.flatnonzero(due <= k)
-        poses = poses_at(*chain, q[k])
-        value = pair_lower_bounds(poses, centres, radii, first, pairs[which], kinds, dims,
-                                  inverse)
+        poses = poses_at(frames, q[k])
+        value = pair_lower_bounds(poses, spheres, pairs[which])
         step = moved[min(k + 1, last)][which] - moved[k][which]
         need = limit[which] + step
         least_may = value < least[0] + margin                    # may be the least
         asked = np.flatnonzero((value <= need) | least_may)
         count[0] = 0
-        if len(asked) and len(convexes[8]):
+        if len(asked):
             value[asked] = np.maximum(value[asked], pair_convex_bounds(
                 convexes, poses, pairs[which[asked]], need[asked], least_may[asked], found,
                 count))
@@ -204,19 +202,6 @@ def check_pass(chain: tuple, spheres: tuple, convexes: tuple, pairs: np.ndarray,
     nothing = np.empty(0)
     return (len(q), np.empty(0, np.int64), nothing, nothing, np.empty(0, np.bool_),
             np.empty((0, 4, 4)), np.empty((0, 4)), True)
-
-
-@kernel
-def sphere_pass(chain: tuple, spheres: tuple, pairs: np.ndarray, q: np.ndarray,
-                moved: np.ndarray, limit: np.ndarray, due: np.ndarray, k: int, margin: float,
-                least: np.ndarray) -> tuple:
-    """``check_pass`` on the spheres alone (also compiles it for the convex sets' types)."""
-    nothing = (np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4, 4)),
-               np.zeros(1, np.int64), np.zeros((0, 3)), np.zeros(1, np.int64),
-               np.zeros(0, np.int64), np.zeros(0, np.bool_), np.zeros(0, np.int64),
-               np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64),
-               np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0))
-    return check_pass(chain, spheres, nothing, pairs, q, moved, limit, due, k, margin, least)
 
 
 @kernel

@@ -14,13 +14,14 @@ spheres come near is left to the exact distances (``distances``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from trajplan_ros.collision.arm_geometry import ArmGeometry, LinkGeometry
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 
-__all__ = ['SPHERES_PER_LINK', 'SphereModel', 'fit_spheres', 'pair_lower_bounds']
+__all__ = ['SPHERES_PER_LINK', 'SphereBounds', 'SphereModel', 'fit_spheres', 'pair_lower_bounds']
 
 #: How many spheres cover a link.
 SPHERES_PER_LINK = 8
@@ -62,6 +63,24 @@ class SphereModel:
         return cls(np.vstack([c for c, _ in fitted]), np.concatenate([r for _, r in fitted]),
                    first.astype(np.int64))
 
+    def bounds(self, kinds: np.ndarray | None = None, dims: np.ndarray | None = None,
+               inverse: np.ndarray | None = None) -> SphereBounds:
+        """Return the spheres with the obstacles' primitives (none: no obstacles) as bounded."""
+        if kinds is None:
+            kinds, dims, inverse = np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4, 4))
+        return SphereBounds(self.centres, self.radii, self.first, kinds, dims, inverse)
+
+
+class SphereBounds(NamedTuple):
+    """What ``pair_lower_bounds`` takes besides the poses and pairs."""
+
+    centres: np.ndarray          # (S, 3) the links' spheres' centres, in their link's frame
+    radii: np.ndarray            # (S,)
+    first: np.ndarray            # (links + 1,) link l's spheres are first[l]:first[l + 1]
+    kinds: np.ndarray            # (O,) each obstacle's primitive (convex.BOX, SPHERE, CYLINDER)
+    dims: np.ndarray             # (O, 3) its dimensions, as shape_msgs orders them
+    inverse: np.ndarray          # (O, 4, 4) the inverse of its pose
+
 
 @inlined_kernel
 def _to_primitive(kind: int, dims: np.ndarray, point: np.ndarray) -> float:
@@ -83,18 +102,17 @@ def _to_primitive(kind: int, dims: np.ndarray, point: np.ndarray) -> float:
 
 
 @kernel
-def pair_lower_bounds(poses: np.ndarray, centres: np.ndarray, radii: np.ndarray,
-                      first: np.ndarray, pairs: np.ndarray, kinds: np.ndarray, dims: np.ndarray,
-                      inverse: np.ndarray) -> np.ndarray:
+def pair_lower_bounds(poses: np.ndarray, spheres: SphereBounds, pairs: np.ndarray
+                      ) -> np.ndarray:
     """
     Return a lower bound of each pair's distance (m; below 0 when the spheres overlap).
 
-    ``poses`` (links, 4, 4) place the links; ``centres`` (S, 3) are in their link's frame,
-    link l's being ``first[l]:first[l + 1]``. Pair (a, b): links a and b when b < links, else
-    link a and obstacle b - links, a primitive of kind ``kinds``, ``dims`` and inverse pose
-    ``inverse`` (4, 4). Link to link: min |c_i - c_j| - r_i - r_j over their spheres; link to
-    obstacle: min d(c_i, obstacle) - r_i.
+    ``poses`` (links, 4, 4) place the links. Pair (a, b): links a and b when b < links, else
+    link a and obstacle b - links (``SphereBounds``). Link to link: min |c_i - c_j| - r_i - r_j
+    over their spheres; link to obstacle: min d(c_i, obstacle) - r_i.
     """
+    centres, radii, first = spheres.centres, spheres.radii, spheres.first
+    kinds, dims, inverse = spheres.kinds, spheres.dims, spheres.inverse
     links = len(first) - 1
     world = np.empty_like(centres)
     for link in range(links):

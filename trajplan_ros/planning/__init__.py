@@ -5,15 +5,15 @@ from trajplan_ros.motion.motion_profile import (JointLimits, MotionProfile, Prof
                                                 read_joint_limits, Timing)
 from trajplan_ros.motion.trajectory import (motion_trajectory, servo_trajectory, Trajectory,
                                             trajectory_points)
-from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_TOLERANCE, plan, PlanResult, PlanStatus,
-                                           prepare)
+from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
+from trajplan_ros.planning.request import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE,
+                                           PlanRequest)
 from trajplan_ros.search.fuzzy import RewardPunishment
 from trajplan_ros.search.objective import InvalidRequest, Mode, Objective
 
 __all__ = [
     'ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'InvalidRequest', 'JointLimits',
-    'Mode', 'MotionProfile', 'Objective', 'PlanResult', 'PlanStatus', 'Profile',
+    'Mode', 'MotionProfile', 'Objective', 'PlanRequest', 'PlanResult', 'PlanStatus', 'Profile',
     'RewardPunishment', 'Timing', 'Trajectory', 'motion_trajectory', 'plan', 'prepare',
     'read_joint_limits', 'servo_trajectory', 'trajectory_points',
 ]

@@ -10,6 +10,7 @@ Direct trajectory planning (Lv et al. 2019): search the final joint angles, then
     >>> result.status, round(result.motion_time_s, 3)
     (<PlanStatus.SUCCEEDED: 'succeeded'>, 4.514)
 
+The keywords are the fields of ``PlanRequest`` (``plan(PlanRequest(goal, ...))`` is the same).
 A caller that must bound the search gives ``max_planning_time`` (s, on ``time.monotonic``)
 and/or ``stop`` (a callable, e.g. true after Ctrl-C). The optimiser asks both after every
 iteration (IEPSO also after every polish step); either ends the search with its best answer so
@@ -19,45 +20,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-import functools
 import time
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from trajplan_ros.collision.distances import CollisionWorld
-from trajplan_ros.collision.free_motion import sphere_pass, write_next_checks
+from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
+from trajplan_ros.collision.scene import Obstacle, Scene
+from trajplan_ros.collision.shapes import Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
+from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.motion.trajectory import motion_points, motion_trajectory, Trajectory
-from trajplan_ros.search.baselines import de, ga, pso, spso
+from trajplan_ros.planning.request import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
+                                           DEFAULT_TOLERANCE, PlanRequest)
 from trajplan_ros.search.free_goal import free_joint_goal
-from trajplan_ros.search.fuzzy import RewardPunishment
-from trajplan_ros.search.iepso import iepso
 from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 
-__all__ = ['ALGORITHMS', 'PlanResult', 'PlanStatus', 'plan', 'DEFAULT_AXIS_TOLERANCE',
-           'DEFAULT_TOLERANCE', 'describe_residual', 'prepare']
+__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
+           'PlanResult', 'PlanStatus', 'describe_residual', 'plan', 'prepare']
 
-#: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
-ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
-    'iepso': iepso, 'pso': pso, 'spso': spso, 'ga': ga, 'de': de,
-}
-#: Largest error (m) that counts as reached unless the caller says otherwise.
-DEFAULT_TOLERANCE = 1e-6
-#: Largest angle (rad) between the tool axis and the goal ray that counts as radial.
-DEFAULT_AXIS_TOLERANCE = 1e-6
 #: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
 _clock: Callable[[], float] = time.monotonic
-
-
-@functools.lru_cache(maxsize=1)
-def _default_arm() -> ArmModel:
-    """Return the paper's arm, built once: ``plan`` uses it internally only, never hands it out."""
-    return paper_arm()
 
 
 class PlanStatus(str, Enum):
@@ -88,8 +75,8 @@ class PlanResult:
     plan_time_s: float = 0.0
     algorithm: str = 'iepso'
     mode: str = Mode.FREE.value
-    omega: float = DEFAULT_OMEGA
-    profile: MotionProfile = field(default_factory=MotionProfile)
+    angular_velocity: float = DEFAULT_OMEGA
+    motion: MotionProfile = field(default_factory=MotionProfile)
     clearance_m: float = float('nan')             # least clearance of the motion (collisions)
     clearance_pair: str = ''                      # where it occurs
     joint_names: tuple[str, ...] = ()             # the arm's, in the trajectory's order
@@ -98,23 +85,33 @@ class PlanResult:
     history_error: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
 
     @property
+    def omega(self) -> float:
+        """Return ``angular_velocity`` (its earlier name, kept for callers)."""
+        return self.angular_velocity
+
+    @property
+    def profile(self) -> MotionProfile:
+        """Return ``motion`` (its earlier name, kept for callers)."""
+        return self.motion
+
+    @property
     def success(self) -> bool:
         """Return True when the goal was reached within the tolerance."""
         return self.status is PlanStatus.SUCCEEDED
 
     def trajectory(self, arm: ArmModel | None = None, sample_period: float = 0.1) -> Trajectory:
         """
-        Return the joint trajectory from the start to the joint goal under ``profile``.
+        Return the joint trajectory from the start to the joint goal under ``motion``.
 
         The result knows its arm's joints and limits; ``arm`` (optional) is checked against it.
         """
         law = self._law(arm)
-        return motion_trajectory(self.start, self.joint_goal, law, self.profile.timing,
+        return motion_trajectory(self.start, self.joint_goal, law, self.motion.timing,
                                  sample_period=sample_period, joint_names=self.joint_names)
 
     def trajectory_points(self, arm: ArmModel | None = None, sample_period: float = 0.1) -> int:
         """Return how many points ``trajectory`` has, without building a long one."""
-        return motion_points(self.start, self.joint_goal, self._law(arm), self.profile.timing,
+        return motion_points(self.start, self.joint_goal, self._law(arm), self.motion.timing,
                              sample_period)
 
     def _law(self, arm: ArmModel | None) -> TimeLaw:
@@ -144,74 +141,53 @@ class PlanResult:
             'plan_time_s': self.plan_time_s,
             'algorithm': self.algorithm,
             'mode': self.mode,
-            'profile': self.profile.profile.value,
-            'timing': self.profile.timing.value,
+            'profile': self.motion.profile.value,
+            'timing': self.motion.timing.value,
             'clearance_m': num(self.clearance_m),
             'clearance_pair': self.clearance_pair or None,
             'message': self.message,
         }
 
 
-def plan(goal: Sequence[float], start: Sequence[float] | None = None, *,
-         arm: ArmModel | None = None, mode: Mode | str = Mode.FREE, algorithm: str = 'iepso',
-         omega: float = DEFAULT_OMEGA, tolerance: float = DEFAULT_TOLERANCE,
-         axis_tolerance: float = DEFAULT_AXIS_TOLERANCE,
-         seed: int | np.random.Generator | None = None, population: int = 40,
-         max_iter: int = 1000, tol: float = 1e-7, shaping: RewardPunishment | None = None,
-         options: dict[str, Any] | None = None, max_planning_time: float | None = None,
-         stop: Callable[[], bool] | None = None,
-         profile: MotionProfile | None = None, world: CollisionWorld | None = None
-         ) -> PlanResult:
+def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None = None, *,
+         stop: Callable[[], bool] | None = None, **settings: Any) -> PlanResult:
     """
-    Plan the joint goal that reaches ``goal`` (m, base frame) from ``start`` in least time.
+    Plan the joint goal that reaches the request's goal from its start in least motion time.
 
+    ``plan(PlanRequest(goal, ...))``, or, the same, ``plan(goal, start, **settings)`` with the
+    request's fields as keywords (``PlanRequest``; the old names of ``RENAMED`` still work).
     Invalid goals and starts give a REJECTED result with the reason, never an exception;
-    invalid settings (unknown mode or algorithm, non-positive numbers) raise ValueError. A search
-    ended by ``max_planning_time`` or ``stop`` is TIMED_OUT or CANCELLED, with its best answer.
-
-    :param goal: tool position (x, y, z) in metres.
-    :param start: all joint angles now (rad); default the upright pose q = 0.
-    :param arm: the arm model; default ``paper_arm()``.
-    :param mode: "free" (position only) or "radial" (eq. 12-13: the tool axis along the goal
-        ray, pointing outward, too).
-    :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
-    :param omega: servo angular velocity (rad/s) of eq. (10); it caps every joint's velocity.
-    :param tolerance: largest position error (m) that counts as reached; ``axis_tolerance``:
-        in radial mode, the largest angle (rad) of the tool axis to the goal ray.
-    :param seed: random seed; the same seed gives the same answer, bit for bit.
-    :param population: swarm (or population) size; ``max_iter``: iteration cap.
-    :param tol: convergence precision (Table 4), the stopping rule's least improvement of F.
-    :param shaping: the rewards-and-punishment settings (Table 4 defaults).
-    :param options: extra keyword arguments for the optimiser (e.g. {"swarms": 4} for IEPSO).
-    :param max_planning_time: longest search (s, monotonic clock); None: no limit. ``stop``:
-        asked after every iteration and polish step; True ends the search (Ctrl-C).
-    :param profile: the motion's profile, timing and limits (``MotionProfile``; default the
-        paper's servo law); the planner minimises that profile's duration. A profile that
-        needs a limit no source gives raises ValueError.
-    :param world: the arm's collision model, scene and padding (``CollisionWorld``): the plan
-        is the fastest direct motion found that keeps the padding (``free_motion``).
+    invalid settings raise ValueError (``PlanRequest.validate``). ``stop`` is asked after every
+    iteration and polish step: True ends the search (Ctrl-C) as CANCELLED, as
+    ``max_planning_time`` ends it as TIMED_OUT, each with its best answer so far.
     """
-    arm, mode = arm if arm is not None else _default_arm(), Mode(mode)
-    _check_settings(algorithm, (tolerance, axis_tolerance), max_planning_time, stop)
-    clock, interrupt = time.perf_counter(), _interrupt(max_planning_time, stop)
-    goal_arr = np.asarray(goal, dtype=float).ravel()
-    profile = profile if profile is not None else MotionProfile()
-    common = {'goal': goal_arr, 'algorithm': algorithm, 'mode': mode.value, 'omega': float(omega),
-              'profile': profile}
+    if not isinstance(request, PlanRequest):
+        request = PlanRequest.from_keywords(request, start, **settings)
+    elif start is not None or settings:
+        raise TypeError('give the start and settings in the PlanRequest, not beside it')
+    request.validate()
+    if stop is not None and not callable(stop):
+        raise ValueError(f'stop must be None or a callable returning bool, got {stop!r}')
+    r = request
+    arm = r.planned_arm
+    clock, interrupt = time.perf_counter(), _interrupt(r.max_planning_time, stop)
+    common = {'goal': r.goal, 'algorithm': r.algorithm, 'mode': r.mode.value,
+              'angular_velocity': float(r.angular_velocity), 'motion': r.motion}
     try:
-        obj = Objective(arm, goal_arr, _start_angles(arm, start), mode=mode, omega=omega,
-                        shaping=shaping, profile=profile)
-        _check_world(world, arm, obj.goal)
-        common.update(joint_names=tuple(arm.joint_names), law=profile.time_law(arm, omega))
+        obj = Objective(arm, r.goal, _start_angles(arm, r.start), mode=r.mode,
+                        omega=r.angular_velocity, shaping=r.shaping, profile=r.motion)
+        _check_world(r.world, obj.goal)
+        common.update(joint_names=tuple(arm.joint_names),
+                      law=r.motion.time_law(arm, r.angular_velocity))
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
-    found = ALGORITHMS[algorithm](obj, population=population, max_iter=max_iter, tol=tol,
-                                  seed=seed, interrupt=interrupt, **(options or {}))
-    result = _outcome(obj, found, _Limits(tolerance, axis_tolerance, max_planning_time), clock,
-                      common)
-    if world is None or not result.success:
+    found = ALGORITHMS[r.algorithm](obj, population=r.population, max_iter=r.max_iterations,
+                                    tol=r.convergence_precision, seed=r.seed,
+                                    interrupt=interrupt, **r.optimizer_options)
+    result = _outcome(obj, found, r, clock, common)
+    if r.world is None or not result.success:
         return result
-    return _collision_free(result, obj, world, seed, tolerance, clock)
+    return _collision_free(result, obj, r.world, r.seed, r.tolerance, clock)
 
 
 def _start_angles(arm: ArmModel, start: Sequence[float] | None) -> np.ndarray:
@@ -219,14 +195,9 @@ def _start_angles(arm: ArmModel, start: Sequence[float] | None) -> np.ndarray:
     return np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
 
 
-def _check_world(world: CollisionWorld | None, arm: ArmModel, goal: np.ndarray) -> None:
-    """Refuse a world of another arm (ValueError) and a goal inside an obstacle."""
-    if world is None:
-        return
-    if world.arm.geometry.arm.joint_names != arm.joint_names:
-        raise ValueError(f'the collision model is of joints {world.arm.geometry.arm.joint_names}'
-                         f', the arm has {arm.joint_names}')
-    inside = world.obstacle_at(goal)
+def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:
+    """Refuse a goal inside an obstacle (InvalidRequest)."""
+    inside = None if world is None else world.obstacle_at(goal)
     if inside is not None:
         raise InvalidRequest(f'goal {goal.tolist()} is inside obstacle {inside!r}')
 
@@ -260,31 +231,6 @@ def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
     return result
 
 
-@dataclass(frozen=True)
-class _Limits:
-    """What a search must reach, and its time limit."""
-
-    tolerance: float
-    axis_tolerance: float
-    max_planning_time: float | None
-
-
-def _check_settings(algorithm: str, tolerances: tuple[float, float],
-                    max_planning_time: float | None, stop: Callable[[], bool] | None) -> None:
-    """Raise ValueError for an unknown algorithm or a bad tolerance or time limit."""
-    if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; choose from {', '.join(ALGORITHMS)}")
-    for name, value in zip(('tolerance', 'axis_tolerance'), tolerances):
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f'{name} must be finite and positive, got {value}')
-    if max_planning_time is not None and not (np.isfinite(max_planning_time)
-                                              and max_planning_time > 0):
-        raise ValueError('max_planning_time must be None or finite and positive, '
-                         f'got {max_planning_time}')
-    if stop is not None and not callable(stop):
-        raise ValueError(f'stop must be None or a callable returning bool, got {stop!r}')
-
-
 def _interrupt(max_planning_time: float | None,
                stop: Callable[[], bool] | None) -> Interrupt | None:
     """
@@ -315,7 +261,7 @@ def describe_residual(value: float, unit: str) -> str:
     return f'0 {unit}' if abs(value) < ROUNDING_FLOOR else f'{value:.3g} {unit}'
 
 
-def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
+def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float,
             axis_err: float) -> tuple[PlanStatus, str]:
     """Return the status of a search and its one-line reason (axis_err NaN in free mode)."""
     if found.interrupted == PlanStatus.TIMED_OUT:
@@ -338,14 +284,14 @@ def _status(found: OptimizeResult, limits: _Limits, pos_err: float,
             f"{describe_residual(pos_err, 'm')}{axis}")
 
 
-def _outcome(obj: Objective, found: OptimizeResult, limits: _Limits, clock: float,
+def _outcome(obj: Objective, found: OptimizeResult, request: PlanRequest, clock: float,
              common: dict[str, Any]) -> PlanResult:
     """Return the result of a search: the joint goal, its errors, the status and a message."""
     joint_goal = obj.full(found.x)[0]
     p, u = obj.arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
     axis_err = float(obj.axis_angle(u)[0]) if obj.radial else float('nan')
-    status, message = _status(found, limits, pos_err, axis_err)
+    status, message = _status(found, request, pos_err, axis_err)
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
         radial_error_rad=axis_err, motion_time_s=found.motion_time, efficiency=found.fun,
@@ -378,24 +324,25 @@ def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
     Where that means compiling, ``announce`` is told so first, with about how long it takes.
 
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
-    the paper's arm once in each mode and a made-up six-joint arm once in free mode (a kernel's
-    machine code serves every arm; the six joints reach the polish's SQP step), and computes
-    the collision check's pass on the spheres once.
+    the paper's arm once in each mode, then once among a box (the collision check), and a
+    made-up six-joint arm once in free mode (a kernel's machine code serves every arm; the six
+    joints reach the polish's SQP step).
     """
     def plans() -> None:
         for mode in Mode:
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
+        plan(_WARM_UP_GOAL, seed=0, world=_warm_up_world())
         arm = _six_joint_arm()
         plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
-        # the collision check's pass on the spheres: two links of one sphere each and a box
-        chain = (np.eye(4), np.stack([np.eye(3)] * 2), np.ones((2, 3)), np.ones(2), np.zeros(2),
-                 np.stack([np.eye(4)] * 2), np.array([-1, 1]), np.stack([np.eye(4)] * 2))
-        spheres = (np.zeros((2, 3)), np.ones(2), np.array([0, 1, 2]), np.zeros(1, np.int64),
-                   np.ones((1, 3)), np.eye(4)[None])
-        due, least = np.zeros(2, np.int64), np.array([np.inf, -1.0, 0.0])
-        sphere_pass(chain, spheres, np.array([[0, 1], [0, 2]]), np.zeros((3, 2)),
-                    np.zeros((3, 2)), np.full(2, -9.0), due, 0, -np.inf, least)
-        write_next_checks(np.zeros((3, 2)), np.arange(2), 0, np.zeros(2), np.full(2, -9.0), due,
-                          least)
 
     return warm_up(plans, announce)
+
+
+def _warm_up_world() -> CollisionWorld:
+    """Return the paper's arm (its URDF's shapes) beside a box, for ``prepare``."""
+    arm = paper_arm()
+    model = ArmCollision.from_urdf(urdf_xml(arm, velocity=DEFAULT_OMEGA).encode(), arm)
+    pose = np.eye(4)
+    pose[:3, 3] = 0.12, -0.12, 0.1
+    box = Obstacle('box', Shape.primitive('box', (0.05, 0.05, 0.2), pose, 'prepare'))
+    return CollisionWorld(model, Scene((box,)))

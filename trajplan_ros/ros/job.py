@@ -67,12 +67,9 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     s = settings
     where = (f'{job.label} {describe_goal(job.goal)} m from q = {describe_goal(start.q)} rad'
              f'{start.describe()}')
-    result = plan(job.goal, start.q, arm=s.arm, mode=s.mode, algorithm=s.algorithm,
-                  omega=s.omega, tolerance=job.tolerance or s.tolerance,
-                  axis_tolerance=s.axis_tolerance, seed=s.seed,
-                  population=s.population, max_iter=s.max_iter,
-                  max_planning_time=s.max_planning_time, stop=stop, profile=s.profile,
-                  world=s.world)
+    request = s.request.replace(goal=job.goal, start=start.q,
+                                tolerance=job.tolerance or s.request.tolerance)
+    result = plan(request, stop=stop)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None

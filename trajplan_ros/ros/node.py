@@ -51,7 +51,6 @@ keeps its last 100 outcomes for subscribers that match late (transient local).
 from __future__ import annotations
 
 import collections
-import dataclasses
 import gc
 import itertools
 import math
@@ -249,7 +248,7 @@ class PlannerNode(Node):
         if settings.world is not before.world:
             self._publish_markers(settings)
         if settings.arm.same_as(before.arm):                  # e.g. only the speed changed
-            self._settings = dataclasses.replace(settings, arm=before.arm)
+            self._settings = settings.planning_with(arm=before.arm)
             return
         self._settings = settings
         if settings.arm.joint_names != before.arm.joint_names:
@@ -272,7 +271,7 @@ class PlannerNode(Node):
             return settings
         w = settings.world
         scene = Scene(w.scene.obstacles + tuple(self._live.obstacles.values()))
-        return dataclasses.replace(settings, world=CollisionWorld(w.arm, scene, w.padding))
+        return settings.planning_with(world=CollisionWorld(w.arm, scene, w.padding))
 
     def _on_semantic(self, msg: String) -> None:
         """Skip the pairs of an SRDF from now on (unless the parameter is set), or say why not."""
@@ -410,8 +409,9 @@ class PlannerNode(Node):
         log = self.get_logger().info if kernels.compiled else self.get_logger().debug
         log(kernels.describe())
         s = self._settings
-        self.get_logger().info(f'ready: {jobs.describe_arm(s)}, {s.algorithm}, {s.omega} rad/s, '
-                               f'{s.profile.describe()} profile')
+        r = s.request
+        self.get_logger().info(f'ready: {jobs.describe_arm(s)}, {r.algorithm}, '
+                               f'{r.angular_velocity} rad/s, {r.motion.describe()} profile')
 
     def _handle(self, job: Job) -> None:
         outcome = self._plan(job)

@@ -20,7 +20,7 @@ parameters (the paper arm) apply.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 import functools
 from typing import Any, Mapping
 
@@ -33,7 +33,8 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import (JointLimits, MotionProfile, Profile,
                                                 read_joint_limits, Timing)
-from trajplan_ros.planning import ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode
+from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode,
+                                   PlanRequest)
 from trajplan_ros.search.objective import DEFAULT_OMEGA
 
 
@@ -163,30 +164,32 @@ def default_values() -> dict[str, Any]:
 class Settings:
     """The planning settings in force, built from (and checked against) the node's parameters."""
 
-    arm: ArmModel
-    omega: float
-    mode: str
-    algorithm: str
-    population: int
-    max_iter: int
-    seed: int | None
-    tolerance: float
-    axis_tolerance: float
+    #: The plan's settings from the parameters (goal and start are each job's).
+    request: PlanRequest
     base_frame: str
     sample_period: float
     start: np.ndarray
-    max_planning_time: float
     max_trajectory_points: int
     max_queued_calls: int
     diagnostic_period: float
-    #: The motion's profile, timing and limits.
-    profile: MotionProfile = field(default_factory=MotionProfile)
     #: The URDF the arm was built from ('' for the DH parameters).
     description: str = ''
     #: start_positions did not fit the described chain and all zeros stand in for it.
     start_ignored: bool = False
-    #: The collision model, the scene_file's obstacles and the padding (None: no check).
-    world: CollisionWorld | None = None
+
+    @property
+    def arm(self) -> ArmModel:
+        """Return the arm planned for."""
+        return self.request.planned_arm
+
+    @property
+    def world(self) -> CollisionWorld | None:
+        """Return the collision model, the scene_file's obstacles and the padding (or None)."""
+        return self.request.world
+
+    def planning_with(self, **changes: Any) -> Settings:
+        """Return these settings with ``changes`` to the plan's (``PlanRequest``'s fields)."""
+        return replace(self, request=self.request.replace(**changes))
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any], topic_description: str = '',
@@ -232,23 +235,30 @@ class Settings:
                              '(change both at once)') from None
         if not np.all(np.isfinite(start)):
             raise ValueError(f'start_positions has a non-finite angle: {start.tolist()}')
-        limits = _joint_limits(values['joint_limits_file']) if values['joint_limits_file'] else {}
-        profile = MotionProfile(profile=values['profile'], timing=values['timing'],
-                                max_acceleration=values['max_acceleration'] or None,
-                                max_jerk=values['max_jerk'] or None, joint_limits=limits)
-        profile.time_law(arm, values['angular_velocity'])     # the limits it needs, or why not
-        return cls(profile=profile, world=_world(values, arm, description, topic_semantic),
-                   arm=arm, omega=values['angular_velocity'], mode=values['mode'],
-                   algorithm=values['algorithm'], population=values['population'],
-                   max_iter=values['max_iterations'],
-                   seed=None if values['seed'] < 0 else values['seed'],
-                   tolerance=values['tolerance'], axis_tolerance=values['axis_tolerance'],
-                   base_frame=base_frame, description=description, start_ignored=ignored,
-                   sample_period=values['sample_period'], start=start,
-                   max_planning_time=values['max_planning_time'],
+        request = _request(values, arm)
+        request = request.replace(world=_world(values, arm, description, topic_semantic))
+        return cls(request=request, base_frame=base_frame, description=description,
+                   start_ignored=ignored, sample_period=values['sample_period'], start=start,
                    max_trajectory_points=values['max_trajectory_points'],
                    max_queued_calls=values['max_queued_calls'],
                    diagnostic_period=values['diagnostic_updater.period'])
+
+
+def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
+    """Return the plan settings of the parameters, checked: all but the world, goal and start."""
+    limits = _joint_limits(values['joint_limits_file']) if values['joint_limits_file'] else {}
+    motion = MotionProfile(profile=values['profile'], timing=values['timing'],
+                           max_acceleration=values['max_acceleration'] or None,
+                           max_jerk=values['max_jerk'] or None, joint_limits=limits)
+    request = PlanRequest(
+        (), arm=arm, mode=values['mode'], motion=motion,
+        angular_velocity=values['angular_velocity'], tolerance=values['tolerance'],
+        axis_tolerance=values['axis_tolerance'], algorithm=values['algorithm'],
+        population=values['population'], max_iterations=values['max_iterations'],
+        seed=None if values['seed'] < 0 else values['seed'],
+        max_planning_time=values['max_planning_time'])
+    request.validate()
+    return request
 
 
 @functools.lru_cache(maxsize=4)

@@ -50,7 +50,7 @@ class SearchOutcome:
 def project_onto_goal(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STEPS) -> np.ndarray:
     """Return joint vectors x (K, m) after Newton steps onto the goal's solutions."""
     for _ in range(steps):
-        here = Linearisation(obj, x, 1.0, newton_only=True)
+        here = Linearisation.at(obj, x, 1.0, newton_only=True)
         x = np.clip(x + here.newton(here.c), obj.lower, obj.upper)
     return x
 

@@ -34,14 +34,14 @@ Where the paper is silent or ill-posed, these are our choices (also listed in th
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
 
-__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'closeness_eq15', 'gaussian',
-           'punishment_eq16', 'reward_eq17', 'rule_degree_table1', 'shaping_eq9']
+__all__ = ['RewardPunishment', 'RULE_TABLE', 'OUTPUT_LEVELS', 'Shaping', 'closeness_eq15',
+           'gaussian', 'punishment_eq16', 'reward_eq17', 'rule_degree_table1', 'shaping_eq9']
 
 #: Output levels of Table 1, as degrees of reward (+) or punishment (-) in [-1, 1].
 OUTPUT_LEVELS: dict[str, float] = {
@@ -124,24 +124,37 @@ def reward_eq17(err: float, eps: float, s: float, j: float) -> float:
     return -j * 4.0 * (eps - err) / (eps - s)
 
 
+class Shaping(NamedTuple):
+    """``RewardPunishment``'s settings as the kernels take them (``RewardPunishment.settings``)."""
+
+    err_max: float          # lambda reaches -1 here (m), eq. (15)
+    eps: float              # reward and punishment waken threshold (m)
+    s: float                # reward waken threshold (m), eq. (17)
+    k: float                # punishment gain, eq. (16)
+    j: float                # reward gain, eq. (17)
+    sigma: float            # width of the Gaussian memberships, Table 2
+    log_scale: bool         # lambda on the log of the error (module docstring)
+    rules: bool             # Table 1's rule base on the punishment
+    rewarded: bool          # the reward of eq. (17) at all
+
+
 @kernel
-def shaping_eq9(err: np.ndarray, tau: np.ndarray, err_max: float, eps: float, s: float,
-                k: float, j: float, sigma: float, log_scale: bool, rules: bool,
-                rewarded: bool) -> np.ndarray:
+def shaping_eq9(err: np.ndarray, tau: np.ndarray, shaping: Shaping) -> np.ndarray:
     """
     Return S of eq. (9) for each error and time fraction: punishment above eps, else reward.
 
     With ``rules`` the punishment's lambda is averaged with Table 1's degree (module docstring).
     """
+    sh = shaping
     out = np.empty(err.size)
     for i in range(err.size):
-        if err[i] <= eps:
-            out[i] = reward_eq17(err[i], eps, s, j) if rewarded else 0.0
+        if err[i] <= sh.eps:
+            out[i] = reward_eq17(err[i], sh.eps, sh.s, sh.j) if sh.rewarded else 0.0
             continue
-        lam = closeness_eq15(err[i], eps, err_max, log_scale)
-        if rules:
-            lam = 0.5 * (lam + rule_degree_table1(lam, min(max(tau[i], 0.0), 1.0), sigma))
-        out[i] = punishment_eq16(lam, k)
+        lam = closeness_eq15(err[i], sh.eps, sh.err_max, sh.log_scale)
+        if sh.rules:
+            lam = 0.5 * (lam + rule_degree_table1(lam, min(max(tau[i], 0.0), 1.0), sh.sigma))
+        out[i] = punishment_eq16(lam, sh.k)
     return out
 
 
@@ -203,11 +216,15 @@ class RewardPunishment:
         """Return the reward of eq. (17): beta1 above s, beta2 at or below it."""
         return _each(reward_eq17, np.asarray(err, dtype=float), self.eps, self.s, self.j)
 
+    def settings(self, err_max: float) -> Shaping:
+        """Return the settings as the kernels take them, lambda reaching -1 at ``err_max``."""
+        return Shaping(float(err_max), float(self.eps), float(self.s), float(self.k),
+                       float(self.j), float(self.sigma), self.lambda_scale == 'log',
+                       bool(self.fuzzy_rules), bool(self.reward))
+
     def __call__(self, err: np.ndarray, tau: np.ndarray, err_max: float) -> np.ndarray:
         """Return S(err) of eq. (9): punishment above eps, reward at or below it."""
         err = np.asarray(err, dtype=float)
         tau = np.broadcast_to(np.asarray(tau, dtype=float), err.shape)
         return shaping_eq9(np.ascontiguousarray(err.ravel()), np.ascontiguousarray(tau.ravel()),
-                           float(err_max), float(self.eps), float(self.s), float(self.k),
-                           float(self.j), float(self.sigma), self.lambda_scale == 'log',
-                           bool(self.fuzzy_rules), bool(self.reward)).reshape(err.shape)
+                           self.settings(err_max)).reshape(err.shape)

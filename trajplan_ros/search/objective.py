@@ -37,7 +37,7 @@ from trajplan_ros.kinematics.forward import Chain, tool_rows
 from trajplan_ros.kinematics.jit import kernel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
-from trajplan_ros.search.fuzzy import RewardPunishment, shaping_eq9
+from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
            'goal_ray_basis']
@@ -183,11 +183,8 @@ class Objective:
         self.chain = arm.chain(self._tail)
         self._across = across
         self._holding: dict[int, Objective] = {}
-        sh = self.shaping                # as efficiency_eq9 takes them, as floats and bools
-        self._shaping_settings = (
-            float(self.err_max), self.longest_time, float(sh.eps), float(sh.s), float(sh.k),
-            float(sh.j), float(sh.sigma), sh.lambda_scale == 'log', bool(sh.fuzzy_rules),
-            bool(sh.reward))
+        #: The S term's settings as the kernels take them.
+        self.shaping_settings = self.shaping.settings(self.err_max)
         #: The objective's arrays as the kernels take them.
         self.problem = Problem(self.chain, self.goal, np.ascontiguousarray(self.across_basis),
                                self.ray_basis, arm.reach, np.ascontiguousarray(self.planned_start),
@@ -316,13 +313,12 @@ class Objective:
         """Evaluate F for candidate planned-joint vectors x (N, planned)."""
         return Evaluation(*efficiency_eq9(
             self.problem, np.ascontiguousarray(np.atleast_2d(x), dtype=float),
-            *self._shaping_settings))
+            self.shaping_settings, self.longest_time))
 
 
 @kernel
-def efficiency_eq9(problem: Problem, x: np.ndarray, err_max: float, longest_time: float,
-                   eps: float, s: float, k: float, j: float, sigma: float, log_scale: bool,
-                   rules: bool, rewarded: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def efficiency_eq9(problem: Problem, x: np.ndarray, shaping: Shaping, longest_time: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     Return F = R + S (eq. 9), R (eq. 10) and the error (eq. 11) at x (N, planned).
 
@@ -335,5 +331,4 @@ def efficiency_eq9(problem: Problem, x: np.ndarray, err_max: float, longest_time
                       problem.reach)
     r = motion_times(problem.law, x, problem.start)
     tau = r / longest_time if longest_time > 0.0 else np.zeros_like(r)
-    return (r + shaping_eq9(err, tau, err_max, eps, s, k, j, sigma, log_scale, rules, rewarded),
-            r, err)
+    return r + shaping_eq9(err, tau, shaping), r, err

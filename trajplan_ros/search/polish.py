@@ -116,26 +116,31 @@ def _active_sets(r: int, k: int, vertex_only: bool = False) -> _ActiveSets:
     return _ActiveSets(pieces, ~(pieces == unused).any(axis=1), clashes, r)
 
 
-class Linearisation:
+class Linearisation(NamedTuple):
     """
-    The constraints c(x) linearised at K candidates x, by name (``linearise_at``).
+    The constraints c(x) linearised at K candidates x (``linearise_at``, ``at``).
 
-    That is c, the motion time, the merit, a pseudo-inverse of the constraint Jacobian J, a
-    basis of its null space, ``quad`` (K, k, k, planned): half the second derivatives of the
-    solution set along every pair of null directions (on its diagonal x''/2 = -J^+ c''/2 along
-    each direction n, with c'' the exact second derivative of c along n), and the error (eq.
-    11). ``newton_only`` leaves the null space and the curvature out (both empty): all a Newton
-    step needs, for speed.
+    ``quad`` (K, k, k, planned) holds half the second derivatives of the solution set along
+    every pair of null directions (on its diagonal x''/2 = -J^+ c''/2 along each direction n,
+    with c'' the exact second derivative of c along n). Without null directions (a Newton step
+    is all that is needed) ``null`` and ``quad`` are empty.
     """
 
-    _FIELDS = ('c', 'time', 'merit', 'pinv', 'null', 'quad', 'error')
+    c: np.ndarray           # (K, 3 + h) the constraints: the tool point's and held axis'
+    time: np.ndarray        # (K,) the motion time R (eq. 10)
+    merit: np.ndarray       # (K,) the polish's merit
+    pinv: np.ndarray        # (K, planned, 3 + h) J^+, a pseudo-inverse of c's Jacobian J
+    null: np.ndarray        # (K, k, planned) N, a basis of J's null space (k null directions)
+    quad: np.ndarray        # (K, k, k, planned) Q
+    error: np.ndarray       # (K,) the error of eq. (11)
 
-    def __init__(self, obj: Objective, x: np.ndarray, weight: float,
-                 newton_only: bool = False) -> None:
-        x = np.ascontiguousarray(x, dtype=float)
+    @classmethod
+    def at(cls, obj: Objective, x: np.ndarray, weight: float,
+           newton_only: bool = False) -> Linearisation:
+        """Return the linearisation at x (K, planned); ``newton_only``: no null space."""
         free = 0 if newton_only else obj.null_directions
-        (self.c, self.time, self.merit, self.pinv, self.null, self.quad,
-         self.error) = linearise_at(obj.problem, x, float(weight), free)
+        return linearise_at(obj.problem, np.ascontiguousarray(x, dtype=float), float(weight),
+                            free)
 
     def newton(self, res: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
         """
@@ -148,12 +153,10 @@ class Linearisation:
         return minimum_norm_steps(self.pinv, np.ascontiguousarray(res, dtype=float),
                                   np.ascontiguousarray(radius, dtype=float))
 
-    def keep(self, other: 'Linearisation', mask: np.ndarray) -> None:
-        """Take other's values where mask is true."""
-        for name in self._FIELDS:
-            mine = getattr(self, name)
-            np.copyto(mine, getattr(other, name),
-                      where=mask.reshape(mask.shape + (1,) * (mine.ndim - 1)))
+    def keep(self, other: Linearisation, mask: np.ndarray) -> None:
+        """Take other's values where mask is true, into these arrays."""
+        for mine, theirs in zip(self, other):
+            np.copyto(mine, theirs, where=mask.reshape(mask.shape + (1,) * (mine.ndim - 1)))
 
 
 class EarlyStop(NamedTuple):
@@ -219,9 +222,7 @@ def early_stop(stop: EarlyStop, motion_time: np.ndarray, error: np.ndarray, radi
 
 
 @kernel
-def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                            np.ndarray, np.ndarray]:
+def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int) -> Linearisation:
     """
     Return ``linearise``'s c, R, merit, J^+, N and Q at x (K, planned), and the error (eq. 11).
 
@@ -235,7 +236,7 @@ def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int
         problem.across, TRAVEL_WEIGHT, weight, free)
     error = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
                         problem.reach)
-    return c, time, merit, pinv, null, quad, error
+    return Linearisation(c, time, merit, pinv, null, quad, error)
 
 
 @inlined_kernel
@@ -248,7 +249,7 @@ def clip_to_box(problem: Problem, x: np.ndarray) -> None:
 
 @inlined_kernel
 def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarray,
-                 null: np.ndarray, quad: np.ndarray, radius: np.ndarray, sets: tuple,
+                 null: np.ndarray, quad: np.ndarray, radius: np.ndarray, sets: _ActiveSets,
                  wide: bool) -> np.ndarray:
     """
     Return the polish's trial points from candidates x (K, planned) and their linearisation.
@@ -282,14 +283,14 @@ def trial_points(problem: Problem, x: np.ndarray, c: np.ndarray, pinv: np.ndarra
 
 
 @kernel
-def polish_step(problem: Problem, x: np.ndarray, model: tuple, delta: np.ndarray,
+def polish_step(problem: Problem, x: np.ndarray, model: Linearisation, delta: np.ndarray,
                 trust: np.ndarray, rejected: np.ndarray, active: np.ndarray, weight: float,
-                sets: tuple, wide: bool) -> None:
+                sets: _ActiveSets, wide: bool) -> None:
     """
     Take one polish step from the ``active`` candidates x (K, planned), in place (``polish``).
 
-    ``model``: ``linearise_at``'s arrays at x; ``delta``: the trust radii (0: converged);
-    ``rejected``: the steps rejected in a row; ``sets``: the active sets of the SQP step.
+    ``model``: the linearisation at x (updated with x); ``delta``: the trust radii (0:
+    converged); ``rejected``: the steps rejected in a row; ``sets``: the SQP step's active sets.
     """
     rows = np.flatnonzero(active)
     c, time, merit, pinv, null, quad, error = model
@@ -303,11 +304,12 @@ def polish_step(problem: Problem, x: np.ndarray, model: tuple, delta: np.ndarray
         for i in range(x.shape[1]):
             moved += (trial[n, i] - x[k, i]) ** 2
         moved = np.sqrt(moved)
-        accept = radius[n] > 0.0 and there[2][n] < merit[k]
+        accept = radius[n] > 0.0 and there.merit[n] < merit[k]
         if accept:
             x[k] = trial[n]
-            c[k], time[k], merit[k], pinv[k] = there[0][n], there[1][n], there[2][n], there[3][n]
-            null[k], quad[k], error[k] = there[4][n], there[5][n], there[6][n]
+            c[k], time[k], merit[k] = there.c[n], there.time[n], there.merit[n]
+            pinv[k], null[k], quad[k], error[k] = (there.pinv[n], there.null[n], there.quad[n],
+                                                   there.error[n])
         # a rejected step shrinks the radius below its own length: the same trial again
         # would be rejected again
         delta[k] = min(2 * radius[n], trust[k]) if accept else min(radius[n], moved) / 2
@@ -320,10 +322,10 @@ def polish_step(problem: Problem, x: np.ndarray, model: tuple, delta: np.ndarray
             delta[k] = 0.0
 
 
-def _prune(model: list[np.ndarray], delta: np.ndarray, active: np.ndarray, count: int) -> None:
+def _prune(model: Linearisation, delta: np.ndarray, active: np.ndarray, count: int) -> None:
     """Leave only the ``count`` active candidates of least merit that have not converged."""
     rows = np.flatnonzero(active)
-    moving = np.where(delta[rows] > 0.0, model[2][rows], np.inf)           # converged: done
+    moving = np.where(delta[rows] > 0.0, model.merit[rows], np.inf)        # converged: done
     out = rows[np.argsort(moving, kind='stable')[count:]]
     delta[out] = 0.0
     active[out] = False
@@ -352,7 +354,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     k, dim = x.shape
     weight = 1e3 / obj.arm.reach    # on |c|: above any Lagrange multiplier here (exact penalty)
     free = obj.null_directions
-    model = list(linearise_at(obj.problem, x, weight, free))
+    model = linearise_at(obj.problem, x, weight, free)
     wide = free > 1                         # a set of solutions of 2 or more dimensions
     trust = np.array(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))   # writable
     delta = trust.copy()                    # the trust radii; 0 once converged
@@ -362,10 +364,10 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     for step in range(max_steps):
         if prune is not None and step == prune[0] and active.sum() > prune[1]:
             _prune(model, delta, active, prune[1])
-        polish_step(obj.problem, x, tuple(model), delta, trust, rejected, active, weight,
+        polish_step(obj.problem, x, model, delta, trust, rejected, active, weight,
                     _active_sets(min(dim, free + LARGEST), free, step < vertex_steps), wide)
         if (not delta.any() or (interrupt is not None and interrupt() is not None)
-                or early_stop(stop, model[1], model[6], delta, previous, step == 0)):
+                or early_stop(stop, model.time, model.error, delta, previous, step == 0)):
             break
     return x
 
@@ -385,10 +387,10 @@ def settle(obj: Objective, x: np.ndarray, below: float, steps: int = 3) -> np.nd
     near = (error > below) & (error < 1e-2 * obj.arm.reach)
     if not near.any():
         return x
-    here = Linearisation(obj, x[near], 1.0, newton_only=True)
+    here = Linearisation.at(obj, x[near], 1.0, newton_only=True)
     for _ in range(steps):
         trial = np.clip(x[near] + here.newton(here.c), obj.lower, obj.upper)
-        there = Linearisation(obj, trial, 1.0, newton_only=True)
+        there = Linearisation.at(obj, trial, 1.0, newton_only=True)
         better = there.error < here.error
         x[np.flatnonzero(near)[better]] = trial[better]
         here.keep(there, better)

@@ -16,7 +16,7 @@ from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
-                                           PlanResult, PlanStatus, prepare)
+                                           PlanRequest, PlanResult, PlanStatus, prepare)
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
@@ -144,7 +144,7 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
     if result.joint_goal is not None:
         lines.append('joint goal [rad]: ' + '  '.join(
             f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
-        motion = result.profile
+        motion = result.motion
         law = '' if motion == MotionProfile() else f' ({motion.describe()})'
         lines.append(f'motion time {result.motion_time_s:.4f} s{law}, position error '
                      f"{describe_residual(result.position_error_m, 'm')}, efficiency F "
@@ -185,24 +185,31 @@ def _line(result: PlanResult, line: int | None, arm: ArmModel,
 def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
               ) -> dict[str, Any]:
     """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
+    request = args.request
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
-                          start=None, algorithm=args.algorithm, mode=args.mode,
-                          omega=args.angular_velocity, profile=args.motion)
+                          start=None, algorithm=request.algorithm, mode=request.mode.value,
+                          angular_velocity=request.angular_velocity, motion=request.motion)
     return {**_record(rejected, line, arm, args), 'goal': None}
+
+
+def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
+    """Return the settings of ``trajplan plan``'s flags as a request (its goal still empty)."""
+    request = PlanRequest(
+        (), arm=arm, mode=args.mode, motion=motion_from_arguments(args),
+        angular_velocity=args.angular_velocity, world=world_from_arguments(args, arm),
+        tolerance=args.tolerance, axis_tolerance=args.axis_tolerance, algorithm=args.algorithm,
+        seed=args.seed, max_planning_time=args.max_planning_time)
+    request.validate()
+    return request
 
 
 def _run_plan(args: argparse.Namespace) -> int:
     arm = arm_from_arguments(args)
     if args.trajectory and not args.json:
         raise UsageError('--trajectory needs --json')
-    if not (args.angular_velocity > 0 and args.sample_period > 0):
-        raise UsageError('--angular-velocity and --sample-period must be positive')
-    args.motion = motion_from_arguments(args)
-    args.motion.time_law(arm, args.angular_velocity)       # the limits it needs: ValueError
-    settings = {'arm': arm, 'mode': args.mode, 'algorithm': args.algorithm, 'seed': args.seed,
-                'tolerance': args.tolerance, 'axis_tolerance': args.axis_tolerance,
-                'max_planning_time': args.max_planning_time, 'omega': args.angular_velocity,
-                'profile': args.motion, 'world': world_from_arguments(args, arm)}
+    if not args.sample_period > 0:
+        raise UsageError('--sample-period must be positive')
+    args.request = request = _request(args, arm)
     kernels = prepare(lambda text: print(f'trajplan: {text}', file=sys.stderr, flush=True))
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
@@ -211,7 +218,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
                              f'got {len(args.xyz)} number(s)')
         start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
-        result = plan(args.xyz, start, **settings)
+        result = plan(request.replace(goal=args.xyz, start=start))
         print(_line(result, None, arm, args))
         return 0 if result.success else 1
     if args.xyz:
@@ -231,7 +238,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             continue
         if start is None:
             start = args.start
-        result = plan(goal, start, **settings)
+        result = plan(request.replace(goal=goal, start=start))
         failures += not result.success
         print(_line(result, number, arm, args))
     return 0 if failures == 0 else 1

@@ -135,7 +135,7 @@ def _plot_joints(fig: Figure, plans: dict[str, PlanResult], arm: ArmModel) -> No
         ax.set_xlabel('time (s)')
     axes[0].legend(fontsize='small')
     fig.suptitle('Fig. 5: joint angles against time, every servo at '
-                 f"{plans['iepso'].omega:g} rad/s")
+                 f"{plans['iepso'].angular_velocity:g} rad/s")
 
 
 def _plot_reward(fig: Figure, runs: dict[str, list[PlanResult]], eps: float) -> None:
@@ -189,8 +189,8 @@ def _plot_profiles(fig: Figure, arm: ArmModel, goal: np.ndarray, seed: int) -> N
     axes = fig.subplots(len(quantities), len(columns), sharex='col', sharey='row')
     for c, (profile, timing) in enumerate(columns):
         motion = MotionProfile(profile, timing, **PROFILE_LIMITS)
-        result = planner.plan(goal, arm=arm, seed=seed, profile=motion)
-        law = motion.time_law(arm, result.omega)
+        result = planner.plan(goal, arm=arm, seed=seed, motion=motion)
+        law = motion.time_law(arm, result.angular_velocity)
         t = np.linspace(0.0, result.motion_time_s * 1.02, 600)
         states = motion_states(result.start, result.joint_goal, law, motion.timing, t)
         for row, values in enumerate(states):

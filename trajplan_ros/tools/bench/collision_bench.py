@@ -40,7 +40,7 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Timing
 from trajplan_ros.motion.trajectory import motion_states
-from trajplan_ros.planning.planner import plan, PlanResult, PlanStatus, prepare
+from trajplan_ros.planning.planner import plan, PlanRequest, PlanResult, PlanStatus, prepare
 from trajplan_ros.search.free_goal import project_onto_goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
@@ -182,14 +182,15 @@ def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
 def _measure(bench: BenchArm, world: CollisionWorld, check: IndependentCheck, goal: np.ndarray,
              args: argparse.Namespace, seed: int, scene: int) -> Row:
     """Plan one goal three ways, check the plan independently, and search by brute force."""
-    settings = {'start': bench.start, 'arm': bench.arm, 'seed': seed, 'omega': args.omega}
-    none = plan(goal, **settings)
-    own = plan(goal, world=CollisionWorld(bench.model, Scene(), world.padding), **settings)
-    result = plan(goal, world=world, **settings)
+    omega = args.angular_velocity
+    request = PlanRequest(goal, bench.start, arm=bench.arm, seed=seed, angular_velocity=omega)
+    none = plan(request)
+    own = plan(request.replace(world=CollisionWorld(bench.model, Scene(), world.padding)))
+    result = plan(request.replace(world=world))
     broken = []
     if result.success:
-        broken = check.violations(_sampled(bench, result, args.omega), START_TOLERANCE)
-    brute = _brute_force(bench, world, goal, args.omega, args.brute) if none.success else None
+        broken = check.violations(_sampled(bench, result, omega), START_TOLERANCE)
+    brute = _brute_force(bench, world, goal, omega, args.brute) if none.success else None
     return Row(bench.name, scene, seed, goal.tolist(), len(world.scene.obstacles) - 1,
                result.status.value,
                result.motion_time_s, brute, result.plan_time_s, own.plan_time_s,
@@ -236,7 +237,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--goals', type=positive_count, default=5, help='goals per scene')
     p.add_argument('--brute', type=positive_count, default=400,
                    help='joint solutions of the brute-force search per goal')
-    p.add_argument('--omega', type=float, default=1.0, help='angular velocity, rad/s')
+    p.add_argument('--angular-velocity', '--omega', type=float, default=1.0, metavar='RAD_S',
+                   help='servo angular velocity omega, rad/s')
     p.add_argument('--padding', type=float, default=DEFAULT_PADDING)
     p.add_argument('--obstacles', type=positive_count, default=10,
                    help='most obstacles per scene besides the table')
@@ -250,8 +252,9 @@ def run(args: argparse.Namespace) -> int:
     """Run the bench and print its table."""
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
     print(f'bench-collisions --arms {" ".join(args.arms)} --seed {seed} --scenes '
-          f'{args.scenes} --goals {args.goals} --brute {args.brute} --omega {args.omega} '
-          f'--padding {args.padding} --obstacles {args.obstacles}', flush=True)
+          f'{args.scenes} --goals {args.goals} --brute {args.brute} --angular-velocity '
+          f'{args.angular_velocity} --padding {args.padding} --obstacles {args.obstacles}',
+          flush=True)
     prepare()
     rng = np.random.default_rng(seed)
     rows = []

@@ -122,7 +122,7 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
           arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
           profile: MotionProfile) -> Answer:
     result = plan(goal, start, arm=arm, mode=mode, algorithm=algorithm, seed=seed,
-                  shaping=shaping, options=options, profile=profile)
+                  shaping=shaping, optimizer_options=options, motion=profile)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
     planned = arm.without_idle_tail(mode is Mode.RADIAL).planned      # as the objective plans

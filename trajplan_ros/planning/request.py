@@ -1,0 +1,190 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+``PlanRequest``: everything one plan needs, under the names users know, and its checking.
+
+The goal and start, the arm, the mode, the motion's profile and the collision world; the
+search's settings (algorithm, swarm size, iteration cap, convergence precision, seed, fuzzy
+shaping, optimiser options); the limits on its work (``max_planning_time``). The names are the
+node's parameters and the ``trajplan plan`` flags: ``angular_velocity`` (``--angular-velocity``),
+``max_iterations``, ``tolerance``, ``axis_tolerance``, ``max_planning_time``.
+
+``validate`` refuses settings with a one-line reason (ValueError); a goal or start the arm
+cannot take is not a settings error: ``plan`` answers it REJECTED, with the reason.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+import functools
+import inspect
+from types import MappingProxyType
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from trajplan_ros.collision.distances import CollisionWorld
+from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.search.baselines import de, ga, pso, spso
+from trajplan_ros.search.fuzzy import RewardPunishment
+from trajplan_ros.search.iepso import iepso
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.search.optimize import OptimizeResult
+
+__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
+           'RENAMED']
+
+#: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
+ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
+    'iepso': iepso, 'pso': pso, 'spso': spso, 'ga': ga, 'de': de,
+}
+#: Largest error (m) that counts as reached unless the caller says otherwise.
+DEFAULT_TOLERANCE = 1e-6
+#: Largest angle (rad) between the tool axis and the goal ray that counts as radial.
+DEFAULT_AXIS_TOLERANCE = 1e-6
+#: Earlier keyword names of ``plan`` -> the request's names (the old ones keep working).
+RENAMED = MappingProxyType({'omega': 'angular_velocity', 'max_iter': 'max_iterations',
+                            'tol': 'convergence_precision', 'profile': 'motion',
+                            'options': 'optimizer_options'})
+#: The optimisers' keywords that the request sets itself, not through ``optimizer_options``.
+_OWN_KEYWORDS = frozenset({'population', 'max_iter', 'tol', 'seed', 'interrupt'})
+
+
+@functools.lru_cache(maxsize=1)
+def _paper_arm() -> ArmModel:
+    """Return the paper's arm, built once for every request without an arm."""
+    return paper_arm()
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """
+    One planning request: the goal, where the arm starts, and every setting of the plan.
+
+    :param goal: tool position (x, y, z), m, in the arm's base frame.
+    :param start: all joint angles now (rad); None: the upright pose q = 0.
+    :param arm: the arm model; None: the paper's arm.
+    :param mode: "free" (position only) or "radial" (eq. 12-13: the tool axis along the goal
+        ray, pointing outward, too).
+    :param motion: the motion's profile, timing and limits; the plan minimises its duration.
+    :param angular_velocity: the servo angular velocity omega of eq. (10), rad/s; it caps every
+        joint's velocity.
+    :param world: the arm's collision model, scene and padding: the plan is the fastest direct
+        motion found that keeps the padding. None: no collision check.
+    :param tolerance: largest position error (m) that counts as reached.
+    :param axis_tolerance: radial mode: largest angle (rad) of the tool axis to the goal ray.
+    :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
+    :param population: swarm (or population) size.
+    :param max_iterations: iteration cap.
+    :param convergence_precision: Table 4's convergence precision: the stopping rule's least
+        improvement of F.
+    :param seed: random seed; the same seed gives the same answer, bit for bit.
+    :param shaping: the rewards-and-punishment settings (None: Table 4's).
+    :param optimizer_options: further keywords of the optimiser (e.g. {"swarms": 4} for IEPSO).
+    :param max_planning_time: longest search (s, monotonic clock); None: no limit.
+    """
+
+    goal: Sequence[float]
+    start: Sequence[float] | None = None
+    arm: ArmModel | None = None
+    mode: Mode | str = Mode.FREE
+    motion: MotionProfile = field(default_factory=MotionProfile)
+    angular_velocity: float = DEFAULT_OMEGA
+    world: CollisionWorld | None = None
+    tolerance: float = DEFAULT_TOLERANCE
+    axis_tolerance: float = DEFAULT_AXIS_TOLERANCE
+    algorithm: str = 'iepso'
+    population: int = 40
+    max_iterations: int = 1000
+    convergence_precision: float = 1e-7
+    seed: int | np.random.Generator | None = None
+    shaping: RewardPunishment | None = None
+    optimizer_options: Mapping[str, Any] = field(default_factory=dict)
+    max_planning_time: float | None = None
+
+    def __post_init__(self) -> None:
+        """Hold the goal as floats (ValueError if it is not numbers) and the mode as a Mode."""
+        object.__setattr__(self, 'goal', np.asarray(self.goal, dtype=float).ravel())
+        if self.start is not None:
+            object.__setattr__(self, 'start', np.asarray(self.start, dtype=float).ravel())
+        if self.mode not in tuple(Mode) + tuple(m.value for m in Mode):
+            raise ValueError(f"mode must be one of {', '.join(m.value for m in Mode)}, "
+                             f'got {self.mode!r}')
+        object.__setattr__(self, 'mode', Mode(self.mode))
+
+    @classmethod
+    def from_keywords(cls, goal: Sequence[float], start: Sequence[float] | None = None,
+                      **settings: Any) -> PlanRequest:
+        """Return the request of ``plan``'s keywords; the names of ``RENAMED`` are taken too."""
+        for old, new in RENAMED.items():
+            if old in settings:
+                if new in settings:
+                    raise TypeError(f'give {new} or its old name {old}, not both')
+                settings[new] = settings.pop(old)
+        if settings.get('motion') is None:
+            settings.pop('motion', None)
+        if settings.get('optimizer_options') is None:
+            settings.pop('optimizer_options', None)
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(settings) - known)
+        if unknown:
+            raise TypeError(f"unknown setting(s) {', '.join(unknown)}; a plan takes "
+                            f"{', '.join(sorted(known - {'goal', 'start'}))}")
+        return cls(goal, start, **settings)
+
+    @property
+    def planned_arm(self) -> ArmModel:
+        """Return the arm planned for: ``arm``, or the paper's when it is None."""
+        return self.arm if self.arm is not None else _paper_arm()
+
+    def replace(self, **changes: Any) -> PlanRequest:
+        """Return a copy with ``changes`` (as ``dataclasses.replace``)."""
+        return replace(self, **changes)
+
+    def validate(self) -> None:
+        """Raise ValueError with a one-line reason when a setting cannot be planned with."""
+        if self.algorithm not in ALGORITHMS:
+            raise ValueError(f'unknown algorithm {self.algorithm!r}; choose from '
+                             f"{', '.join(ALGORITHMS)}")
+        positive = {'angular_velocity': self.angular_velocity, 'tolerance': self.tolerance,
+                    'axis_tolerance': self.axis_tolerance}
+        if self.max_planning_time is not None:
+            positive['max_planning_time'] = self.max_planning_time
+        for name, value in positive.items():
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise ValueError(f'{name} must be finite and positive, got {value!r}')
+        if not (isinstance(self.convergence_precision, (int, float))
+                and np.isfinite(self.convergence_precision) and self.convergence_precision >= 0):
+            raise ValueError('convergence_precision must be finite and not negative, '
+                             f'got {self.convergence_precision!r}')
+        for name, least in (('population', 2), ('max_iterations', 1)):
+            value = getattr(self, name)
+            if (isinstance(value, bool) or not isinstance(value, (int, np.integer))
+                    or value < least):
+                raise ValueError(f'{name} must be an integer of at least {least}, got {value!r}')
+        if not (self.seed is None or isinstance(self.seed, np.random.Generator)
+                or isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool)
+                and self.seed >= 0):
+            raise ValueError(f'seed must be None, an integer >= 0 or a numpy Generator, '
+                             f'got {self.seed!r}')
+        self._check_options()
+        arm = self.planned_arm
+        if self.world is not None and self.world.arm.geometry.arm.joint_names != arm.joint_names:
+            raise ValueError(f'the collision model is of joints '
+                             f'{self.world.arm.geometry.arm.joint_names}, the arm has '
+                             f'{arm.joint_names}')
+        self.motion.time_law(arm, self.angular_velocity)        # the limits it needs, or why not
+
+    def _check_options(self) -> None:
+        """Refuse an optimiser option that the algorithm does not take."""
+        accepted = _options_of(self.algorithm)
+        unknown = sorted(set(self.optimizer_options) - accepted)
+        if unknown:
+            raise ValueError(f"{self.algorithm} has no option {', '.join(unknown)}; it takes "
+                             f"{', '.join(sorted(accepted)) or 'none'}")
+
+
+@functools.lru_cache(maxsize=None)
+def _options_of(algorithm: str) -> frozenset[str]:
+    """Return the keywords of an optimiser that ``optimizer_options`` may set."""
+    return frozenset(inspect.signature(ALGORITHMS[algorithm]).parameters) - _OWN_KEYWORDS - {'obj'}
