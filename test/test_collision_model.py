@@ -233,7 +233,7 @@ def test_hull_and_piece_bounds_never_exceed_the_triangles_and_decide_alike(mesh_
          'position': [-0.2, 0.0, 0.45]}]})
     world = CollisionWorld(model, scene)
     every = np.arange(len(world.pairs))
-    ring_hole = next(p for p in every if world.describe(p) == "ring with 'in_hole'")
+    ring_hole = next(p for p in every if world.pair_name(p) == "ring with 'in_hole'")
     nothing = (np.empty((0, 4)), np.zeros(1, dtype=np.int64))
     for q in np.random.default_rng(5).uniform(-np.pi, np.pi, (40, arm.n_joints)):
         poses = model.geometry.link_poses(q[None])[0]
@@ -248,7 +248,7 @@ def test_hull_and_piece_bounds_never_exceed_the_triangles_and_decide_alike(mesh_
             np.testing.assert_array_equal(bound <= needed, exact <= needed)
             np.testing.assert_allclose(bound[known], exact[known], atol=1e-12)
             for p in every:
-                assert world.within(poses, p, needed) == (exact[p] < needed), world.describe(p)
+                assert world.within(poses, p, needed) == (exact[p] < needed), world.pair_name(p)
         # the ring's hull holds the ball, its triangles (and the hulls of their pieces) do not
         covers = pair_convex_bounds(world.convexes.arrays, poses, world.pairs,
                                     np.full(len(every), -np.inf), np.zeros(len(every), bool),

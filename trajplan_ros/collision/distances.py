@@ -570,18 +570,18 @@ class CollisionWorld:
                                       float(needed[n]), tight, decide)
         return out, exact
 
-    def decide(self, poses: np.ndarray, pair: int, rows: np.ndarray, needed: float) -> float:
+    def decide(self, poses: np.ndarray, pair: int, notes: np.ndarray, needed: float) -> float:
         """
         Return pair ``pair``'s distance if at most ``needed``, else a bound just above it.
 
-        ``rows`` are ``pair_convex_bounds``' notes on the pair (pair, convex sets, bound): the
+        ``notes`` are ``pair_convex_bounds``' notes on the pair (pair, convex sets, bound): the
         piece pairs that may come within ``needed``, and bounds of the rest (sets -1). coal
         measures the pieces' triangles in the order of their bounds until one is within
         ``needed``, or the next bound is above it or the least measured: the least of those is
         the bound returned.
         """
         best, placed = np.inf, {}
-        for _, one, other, bound in rows[np.argsort(rows[:, 3], kind='stable')]:
+        for _, one, other, bound in notes[np.argsort(notes[:, 3], kind='stable')]:
             if bound >= best or bound > needed:
                 return float(max(min(best, bound), np.nextafter(needed, np.inf)))
             (g1, t1), (g2, t2) = (self._piece(int(c), poses, placed) for c in (one, other))
@@ -622,7 +622,7 @@ class CollisionWorld:
         a, b = self.pairs[pair]
         return placed[a], placed[b] if b < links else self._obstacles[b - links]
 
-    def describe(self, pair: int) -> str:
+    def pair_name(self, pair: int) -> str:
         """Return a pair as 'link with link' or "link with 'obstacle'"."""
         names = self.arm.link_names
         a, b = self.pairs[pair]

@@ -89,7 +89,7 @@ class StartLimits:
                                np.arange(len(world.pairs)))
         close = np.flatnonzero(at_start <= world.padding)
         limit[close] = at_start[close] - START_TOLERANCE
-        return cls(limit, ', '.join(world.describe(p) for p in close))
+        return cls(limit, ', '.join(world.pair_name(p) for p in close))
 
 
 def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law: TimeLaw,
@@ -114,30 +114,30 @@ def check_motion(world: CollisionWorld, start: np.ndarray, goal: np.ndarray, law
     end = world.arm.geometry.link_poses(goal[None])[0]
     blocked = _blocked_at(world, end, np.where(due < len(t), limit, -np.inf))
     if blocked is not None:                          # most colliding candidates end in it
-        return Clearance(False, world.padding, world.describe(blocked), float(t[-1]), within)
+        return Clearance(False, world.padding, world.pair_name(blocked), float(t[-1]), within)
     moved = np.ascontiguousarray(np.abs(q - start) @ world.sweep.T)     # b_p(t), (M, P)
     margin = 0.0 if exact_clearance else -np.inf
     frames, spheres = world.arm.geometry.frames, world.sphere_bounds
     convexes = world.convexes.arrays
     k = int(due.min())
     while k < len(t):
-        k, which, value, step, near, poses, rows, complete = check_pass(
+        k, which, value, step, near, poses, notes, complete = check_pass(
             frames, spheres, convexes, world.pairs, q, moved, limit, due, k, margin, least)
         if k == len(t):
             break
         needed = limit[which] + step
         for n in np.flatnonzero(near):
-            value[n] = (world.decide(poses, which[n], rows[rows[:, 0] == n], needed[n])
+            value[n] = (world.decide(poses, which[n], notes[notes[:, 0] == n], needed[n])
                         if complete else world.bounded(poses, which[n:n + 1], needed[n:n + 1],
                                                        exact_clearance, True)[0][0])
         bad = np.flatnonzero(value <= needed)
         if bad.size:
             p = which[bad[0]]
-            return Clearance(False, float(value[bad[0]]), world.describe(p), float(t[k]), within)
+            return Clearance(False, float(value[bad[0]]), world.pair_name(p), float(t[k]), within)
         write_next_checks(moved, which, k, value, limit, due, least)
         k = int(due.min())
-    return Clearance(True, float(least[0]), world.describe(int(least[1])), float(t[int(least[2])]),
-                     within)
+    return Clearance(True, float(least[0]), world.pair_name(int(least[1])),
+                     float(t[int(least[2])]), within)
 
 
 def _clear_by_tables(world: CollisionWorld, q: np.ndarray, limit: np.ndarray, due: np.ndarray,
@@ -193,10 +193,10 @@ def check_pass(frames: LinkFrames, spheres: SphereBounds, convexes: ConvexArrays
                 count))
         near = value <= need
         if near.any():
-            rows = found[:min(count[0], len(found))].copy()
-            for r in range(len(rows)):
-                rows[r, 0] = asked[int(rows[r, 0])]
-            return k, which, value, step, near, poses, rows, count[0] <= len(found)
+            notes = found[:min(count[0], len(found))].copy()
+            for r in range(len(notes)):
+                notes[r, 0] = asked[int(notes[r, 0])]
+            return k, which, value, step, near, poses, notes, count[0] <= len(found)
         write_next_checks(moved, which, k, value, limit, due, least)
         k = np.min(due)
     nothing = np.empty(0)
@@ -256,12 +256,12 @@ def _blocked_at(world: CollisionWorld, poses: np.ndarray, limit: np.ndarray) -> 
     found, count = np.empty((FOUND_ROWS, 4)), np.zeros(1, dtype=np.int64)
     bounds = pair_convex_bounds(world.convexes.arrays, poses, world.pairs[near], limit[near],
                                 np.zeros(len(near), dtype=np.bool_), found, count)
-    rows = found[:min(count[0], FOUND_ROWS)]
+    notes = found[:min(count[0], FOUND_ROWS)]
     for n in np.flatnonzero(bounds <= limit[near])[np.argsort((bounds - limit[near])[
             bounds <= limit[near]], kind='stable')]:
         p = int(near[n])
         if count[0] <= FOUND_ROWS:
-            value = world.decide(poses, p, rows[rows[:, 0] == n], float(limit[p]))
+            value = world.decide(poses, p, notes[notes[:, 0] == n], float(limit[p]))
         else:
             value = world.bounded(poses, near[n:n + 1], limit[p:p + 1], decide=True)[0][0]
         if value <= limit[p]:

@@ -41,7 +41,7 @@ from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, O
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 
 __all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
-           'PlanResult', 'PlanStatus', 'describe_residual', 'plan', 'prepare']
+           'PlanResult', 'PlanStatus', 'describe_goal', 'describe_residual', 'plan', 'prepare']
 
 #: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
 _clock: Callable[[], float] = time.monotonic
@@ -254,6 +254,11 @@ def _interrupt(max_planning_time: float | None,
 
 #: Residuals below this (m or rad) are floating-point rounding of the kinematics: written as 0.
 ROUNDING_FLOOR = 1e-12
+
+
+def describe_goal(xyz: Sequence[float]) -> str:
+    """Write a point as the node's and the command's log lines do (6 significant digits)."""
+    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
 
 
 def describe_residual(value: float, unit: str) -> str:

@@ -9,23 +9,19 @@ Pure translation between the planning core and ROS messages, no node: the worker
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable
 
 from nav_msgs.msg import Path
 from std_msgs.msg import Header
 from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
+from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
-__all__ = ['Outcome', 'describe_arm', 'describe_goal', 'run']
-
-
-def describe_goal(xyz: Sequence[float]) -> str:
-    """Write a point as the node's log lines do."""
-    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
+__all__ = ['Outcome', 'describe_arm', 'run']
 
 
 def describe_arm(settings: Settings) -> str:

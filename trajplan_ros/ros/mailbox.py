@@ -42,7 +42,7 @@ class Job:
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan
-    settled: bool = False            # logged and counted
+    counted: bool = False            # logged and counted
     reported: bool = False           # its outcome published on plan_results
     taken: threading.Event = field(default_factory=threading.Event)   # the answer is taken
 

@@ -83,6 +83,7 @@ from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.planning import prepare
+from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
@@ -306,7 +307,7 @@ class PlannerNode(Node):
     def _on_goal(self, msg: Point) -> None:
         self._counters.add('goals_received')
         job = Job(f'goal #{next(self._goal_ids)}', (msg.x, msg.y, msg.z))
-        self._log.debug(f'queued {job.label} {jobs.describe_goal(job.goal)} m')
+        self._log.debug(f'queued {job.label} {describe_goal(job.goal)} m')
         superseded = self._mailbox.put_goal(job)
         if superseded is job:
             self._give_up(job)
@@ -314,7 +315,7 @@ class PlannerNode(Node):
             self._counters.add('goals_superseded')
             reason = f'{job.label} arrived while planning'
             self._log.info(
-                f'superseded {superseded.label} {jobs.describe_goal(superseded.goal)} m: '
+                f'superseded {superseded.label} {describe_goal(superseded.goal)} m: '
                 f'{reason}')
             self._publish_outcome(superseded, 'superseded', reason)
 
@@ -361,7 +362,7 @@ class PlannerNode(Node):
         return response
 
     def _refused(self, job: Job, reason: str) -> None:
-        self._log.warning(f'{job.label} {jobs.describe_goal(job.goal)} m: refused: {reason}')
+        self._log.warning(f'{job.label} {describe_goal(job.goal)} m: refused: {reason}')
         self._publish_outcome(job, 'refused', reason)
 
     def _publish_outcome(self, job: Job, status: str, reason: str,
@@ -393,7 +394,7 @@ class PlannerNode(Node):
                 self._handle(job)
             except Exception as exc:  # noqa: BLE001 - a bug must not end the planning thread
                 reason = f'planning failed: {exc!r}'
-                self.get_logger().error(f'{job.label} {jobs.describe_goal(job.goal)} m: '
+                self.get_logger().error(f'{job.label} {describe_goal(job.goal)} m: '
                                         f'{reason}')
                 self._give_up(job, status='failed', reason=reason)
             self._current = None
@@ -427,7 +428,7 @@ class PlannerNode(Node):
         """Plan one job into its messages and log line."""
         s = self._settings
         start = self._states.start(s.arm.joint_names, s.start)
-        self._log.debug(f'planning {job.label} {jobs.describe_goal(job.goal)} m')
+        self._log.debug(f'planning {job.label} {describe_goal(job.goal)} m')
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
@@ -438,7 +439,7 @@ class PlannerNode(Node):
     def _report(self, job: Job, outcome: jobs.Outcome) -> None:
         """Publish a successful plan and log every one; nothing is published at shutdown."""
         with self._publish_lock:
-            if self._stopping.is_set() or not self._settle(job):
+            if self._stopping.is_set() or not self._mark_counted(job):
                 self._give_up(job)
                 return
             if not job.is_call:
@@ -459,10 +460,10 @@ class PlannerNode(Node):
         else:
             self._log.warning(outcome.log)
 
-    def _settle(self, job: Job) -> bool:
+    def _mark_counted(self, job: Job) -> bool:
         """Mark ``job`` as logged and counted; False if it already was."""
         with self._answer_lock:
-            first, job.settled = not job.settled, True
+            first, job.counted = not job.counted, True
             return first
 
     def _give_up(self, job: Job, status: str = 'shut_down', reason: str = '') -> None:
@@ -473,14 +474,14 @@ class PlannerNode(Node):
         """
         if job.is_call:
             self._answer(job, None)
-        if self._settle(job):
+        if self._mark_counted(job):
             if not job.is_call:
                 self._counters.add('goals_failed')
             if not reason:
                 given = ('answered with a plan; not published' if job.planned_answer
                          else 'unplanned')
                 reason = f'{given}: shutting down'
-                self.get_logger().info(f'{job.label} {jobs.describe_goal(job.goal)} m: {reason}')
+                self.get_logger().info(f'{job.label} {describe_goal(job.goal)} m: {reason}')
         self._publish_outcome(job, status, reason or 'shutting down')   # unless told already
 
     def _answer(self, job: Job, path: Path | None) -> None:

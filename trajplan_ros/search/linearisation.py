@@ -199,19 +199,19 @@ def damped_pseudo_inverses(jac: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def null_bases(jac: np.ndarray, pinv: np.ndarray, free: int) -> np.ndarray:
+def null_bases(jac: np.ndarray, pinv: np.ndarray, nulls: int) -> np.ndarray:
     """
-    Return a basis of the null space of each J (K, free, dim), orthonormal rows.
+    Return a basis of the null space of each J (K, nulls, dim), orthonormal rows.
 
     One direction: the largest column of the projector I - J^+ J (the first of equals),
     normalised; more: the columns of a complete QR of J^T beyond its rows
     (``complete_null_basis``).
     """
     count, rows, dim = jac.shape
-    null = np.zeros((count, free, dim))
+    null = np.zeros((count, nulls, dim))
     reflectors, tau = np.empty((dim, rows)), np.empty(rows)   # J^T, then its reflectors
     for k in range(count):
-        if free > 1:
+        if nulls > 1:
             reflectors[:] = jac[k].T
             complete_null_basis(reflectors, tau, null[k])
             continue
@@ -243,21 +243,21 @@ def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray
     ``hessian`` (K, dim, dim, 2, 3): the second derivatives of p and u, which the residuals
     map as ``residuals_and_jacobians`` does; ``null`` (K, k, dim): the null directions n_a.
     """
-    count, free, dim = null.shape
+    count, nulls, dim = null.shape
     held, rows = across.shape[0], pinv.shape[2]
-    quad = np.zeros((count, free, free, dim))
-    turn, second = np.empty((free, dim, 2, 3)), np.empty(rows)   # the Hessian times each n_b
+    quad = np.zeros((count, nulls, nulls, dim))
+    turn, second = np.empty((nulls, dim, 2, 3)), np.empty(rows)   # the Hessian times each n_b
     for k in range(count):
         turn[:] = 0.0
-        for b in range(free):
+        for b in range(nulls):
             for i in range(dim):
                 for j in range(dim):
                     weight_j = null[k, b, j]
                     for t in range(2):
                         for e in range(3):
                             turn[b, i, t, e] += hessian[k, i, j, t, e] * weight_j
-        for a in range(free):
-            for b in range(a, free):
+        for a in range(nulls):
+            for b in range(a, nulls):
                 for e in range(3):
                     total = 0.0
                     for i in range(dim):
@@ -282,7 +282,7 @@ def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray
 @inlined_kernel
 def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.ndarray,
               law: TimeLaw, omega: float, goal: np.ndarray, across: np.ndarray,
-              travel_weight: float, weight: float, free: int
+              travel_weight: float, weight: float, nulls: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          np.ndarray]:
     """
@@ -292,10 +292,10 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
     (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
     directions); ``start``: per planned joint; ``law``: the joints' time laws; ``across`` (h,
     3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
-    ``weight`` (W): the merit's weights of the travel and of |c|; ``free``: the null
+    ``weight`` (W): the merit's weights of the travel and of |c|; ``nulls``: the null
     directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
-    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, free, planned) and Q (K, free,
-    free, planned).
+    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, nulls, planned) and Q (K, nulls,
+    nulls, planned).
     """
     count, dim = x.shape
     c, jac = residuals_and_jacobians(walk, goal, across)
@@ -310,19 +310,19 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
             norm += c[k, a] * c[k, a]
         time[k] = largest
         merit[k] = time[k] * omega + travel_weight * travel + weight * np.sqrt(norm)
-    pinv, null, quad = solution_model(jac, hessian, across, free)
+    pinv, null, quad = solution_model(jac, hessian, across, nulls)
     return c, time, merit, pinv, null, quad
 
 
 @kernel
-def solution_model(jac: np.ndarray, hessian: np.ndarray, across: np.ndarray, free: int
+def solution_model(jac: np.ndarray, hessian: np.ndarray, across: np.ndarray, nulls: int
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return J^+, N and Q (see ``linearise``) from the Jacobians jac (K, 3 + h, planned)."""
     count, dim = jac.shape[0], jac.shape[2]
     pinv = damped_pseudo_inverses(jac)
-    if free == 0:
+    if nulls == 0:
         return pinv, np.zeros((count, 0, dim)), np.zeros((count, 0, 0, dim))
-    null = null_bases(jac, pinv, free)
+    null = null_bases(jac, pinv, nulls)
     return pinv, null, solutions_curvatures(hessian, null, pinv, across)
 
 
@@ -435,14 +435,14 @@ def line_searches(null: np.ndarray, quad: np.ndarray, base: np.ndarray, start: n
     (``scale`` (K, m): ``time_law.tie_scales``), ties within ``tie`` going to the least total
     travel.
     """
-    count, free, m = null.shape
+    count, nulls, m = null.shape
     out = base.copy()
     b = np.empty(m)
     n = np.empty(m)
     a = np.empty(m)
     for k in range(count):
         x = out[k]
-        for j in range(free):
+        for j in range(nulls):
             zlo, zhi = -radius[k], radius[k]
             for i in range(m):
                 step = null[k, j, i]

@@ -138,9 +138,9 @@ class Linearisation(NamedTuple):
     def at(cls, obj: Objective, x: np.ndarray, weight: float,
            newton_only: bool = False) -> Linearisation:
         """Return the linearisation at x (K, planned); ``newton_only``: no null space."""
-        free = 0 if newton_only else obj.null_directions
+        nulls = 0 if newton_only else obj.null_directions
         return linearise_at(obj.problem, np.ascontiguousarray(x, dtype=float), float(weight),
-                            free)
+                            nulls)
 
     def newton(self, res: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
         """
@@ -222,19 +222,19 @@ def early_stop(stop: EarlyStop, motion_time: np.ndarray, error: np.ndarray, radi
 
 
 @kernel
-def linearise_at(problem: Problem, x: np.ndarray, weight: float, free: int) -> Linearisation:
+def linearise_at(problem: Problem, x: np.ndarray, weight: float, nulls: int) -> Linearisation:
     """
     Return ``linearise``'s c, R, merit, J^+, N and Q at x (K, planned), and the error (eq. 11).
 
-    ``free``: the null directions wanted (0: a Newton step is all that is needed).
+    ``nulls``: the null directions wanted (0: a Newton step is all that is needed).
     """
-    rows = tool_rows(problem.chain, x, True)
+    walk = tool_rows(problem.chain, x, True)
     dim = x.shape[1]
-    hessian = chain_hessian(rows) if free else np.empty((0, dim, dim, 2, 3))
+    hessian = chain_hessian(walk) if nulls else np.empty((0, dim, dim, 2, 3))
     c, time, merit, pinv, null, quad = linearise(
-        rows, hessian, x, problem.start, problem.law, problem.omega, problem.goal,
-        problem.across, TRAVEL_WEIGHT, weight, free)
-    error = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
+        walk, hessian, x, problem.start, problem.law, problem.omega, problem.goal,
+        problem.across, TRAVEL_WEIGHT, weight, nulls)
+    error = errors_eq11(walk[0], walk[1], problem.goal, problem.ray, problem.across.shape[0],
                         problem.reach)
     return Linearisation(c, time, merit, pinv, null, quad, error)
 
@@ -292,14 +292,14 @@ def polish_step(problem: Problem, x: np.ndarray, model: Linearisation, delta: np
     ``model``: the linearisation at x (updated with x); ``delta``: the trust radii (0:
     converged); ``rejected``: the steps rejected in a row; ``sets``: the SQP step's active sets.
     """
-    rows = np.flatnonzero(active)
+    stepping = np.flatnonzero(active)
     c, time, merit, pinv, null, quad, error = model
-    radius = delta[rows]
-    trial = trial_points(problem, x[rows], c[rows], pinv[rows], null[rows], quad[rows], radius,
-                         sets, wide)
+    radius = delta[stepping]
+    trial = trial_points(problem, x[stepping], c[stepping], pinv[stepping], null[stepping],
+                         quad[stepping], radius, sets, wide)
     there = linearise_at(problem, trial, weight, null.shape[1])
-    for n in range(rows.shape[0]):
-        k = rows[n]
+    for n in range(stepping.shape[0]):
+        k = stepping[n]
         moved = 0.0
         for i in range(x.shape[1]):
             moved += (trial[n, i] - x[k, i]) ** 2
@@ -324,9 +324,9 @@ def polish_step(problem: Problem, x: np.ndarray, model: Linearisation, delta: np
 
 def _prune(model: Linearisation, delta: np.ndarray, active: np.ndarray, count: int) -> None:
     """Leave only the ``count`` active candidates of least merit that have not converged."""
-    rows = np.flatnonzero(active)
-    moving = np.where(delta[rows] > 0.0, model.merit[rows], np.inf)        # converged: done
-    out = rows[np.argsort(moving, kind='stable')[count:]]
+    stepping = np.flatnonzero(active)
+    moving = np.where(delta[stepping] > 0.0, model.merit[stepping], np.inf)   # converged: done
+    out = stepping[np.argsort(moving, kind='stable')[count:]]
     delta[out] = 0.0
     active[out] = False
 
@@ -353,9 +353,9 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
     k, dim = x.shape
     weight = 1e3 / obj.arm.reach    # on |c|: above any Lagrange multiplier here (exact penalty)
-    free = obj.null_directions
-    model = linearise_at(obj.problem, x, weight, free)
-    wide = free > 1                         # a set of solutions of 2 or more dimensions
+    nulls = obj.null_directions
+    model = linearise_at(obj.problem, x, weight, nulls)
+    wide = nulls > 1                         # a set of solutions of 2 or more dimensions
     trust = np.array(np.broadcast_to(np.asarray(trust, dtype=float), (k,)))   # writable
     delta = trust.copy()                    # the trust radii; 0 once converged
     active = np.ones(k, dtype=bool)         # the candidates that take steps
@@ -365,7 +365,7 @@ def polish(obj: Objective, x: np.ndarray, *, max_steps: int = 30,
         if prune is not None and step == prune[0] and active.sum() > prune[1]:
             _prune(model, delta, active, prune[1])
         polish_step(obj.problem, x, model, delta, trust, rejected, active, weight,
-                    _active_sets(min(dim, free + LARGEST), free, step < vertex_steps), wide)
+                    _active_sets(min(dim, nulls + LARGEST), nulls, step < vertex_steps), wide)
         if (not delta.any() or (interrupt is not None and interrupt() is not None)
                 or early_stop(stop, model.time, model.error, delta, previous, step == 0)):
             break

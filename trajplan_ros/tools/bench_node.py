@@ -52,9 +52,8 @@ import numpy as np
 from rcl_interfaces.srv import GetParameters
 from rclpy.utilities import get_rmw_implementation_identifier
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.planning.planner import plan, prepare
-from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, describe_goal, PlannerProcess,
-                                             ros_environment)
+from trajplan_ros.planning.planner import describe_goal, plan, prepare
+from trajplan_ros.tools.node_process import COMPILE_BOUND_S, PlannerProcess, ros_environment
 from trajplan_ros.tools.ros_client import RosClient
 
 

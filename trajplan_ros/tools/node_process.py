@@ -20,18 +20,13 @@ import time
 from typing import Callable, Mapping, Sequence
 
 
-__all__ = ['COMPILE_BOUND_S', 'TIMEOUT_S', 'PlannerProcess', 'describe_goal', 'planner_command',
+__all__ = ['COMPILE_BOUND_S', 'TIMEOUT_S', 'PlannerProcess', 'planner_command',
            'ros_environment', 'wait_until']
 
 #: Liveness bound (s) for anything a client waits on by default: discovery, an answer.
 TIMEOUT_S = 60.0
 #: Liveness bound (s) on the compile of a first start, which the node announces in its log.
 COMPILE_BOUND_S = 900.0
-
-
-def describe_goal(xyz: Sequence[float]) -> str:
-    """Write a point as the node's log lines do (6 significant digits)."""
-    return '(' + ', '.join(f'{v:.6g}' for v in xyz) + ')'
 
 
 def wait_until(predicate: Callable[[], bool], timeout: float = TIMEOUT_S,

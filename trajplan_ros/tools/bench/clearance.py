@@ -140,7 +140,7 @@ class IndependentCheck:
         """Return the least distance over joint angles q (N, n), its pair and sample index."""
         d = self.distances(q)
         k, p = np.unravel_index(np.argmin(d), d.shape)
-        return float(d[k, p]), self.world.describe(int(p)), int(k)
+        return float(d[k, p]), self.world.pair_name(int(p)), int(k)
 
     def violations(self, q: np.ndarray, tolerance: float) -> list[str]:
         """
@@ -160,7 +160,7 @@ class IndependentCheck:
             least = min((self._distance(self.links[a], poses[k, a], other, other_poses[k],
                                         limit) for k in near), default=np.inf)
             if least <= limit:
-                broken.append(f'{self.world.describe(p)} at {least:.4g} m')
+                broken.append(f'{self.world.pair_name(p)} at {least:.4g} m')
         return broken
 
     @staticmethod
