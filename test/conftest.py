@@ -45,8 +45,12 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 
 @pytest.fixture()
 def empty_kernel_cache(tmp_path: Path) -> Path:
-    """Return a kernel cache without kernels: the run's own while it has none, else a new one."""
-    if _KERNEL_CACHE is not None and not any(p.is_file() for p in Path(_KERNEL_CACHE).rglob('*')):
+    """
+    Return a kernel cache without kernels: the run's own while it has none, else a new one.
+
+    A kernel's index is a ``.nbi`` file; other files there (the core stamp's memo) do not count.
+    """
+    if _KERNEL_CACHE is not None and not any(Path(_KERNEL_CACHE).rglob('*.nbi')):
         return Path(_KERNEL_CACHE)
     return tmp_path / 'cache'
 

@@ -41,43 +41,37 @@ ITERATIONS = 48
 CLIMB_FROM = 48
 
 
+class ConvexArrays(NamedTuple):
+    """Convex sets of bodies as the kernels take them (C sets, N hull vertices)."""
+
+    kinds: np.ndarray           # (C,) BOX, SPHERE, CYLINDER or POINTS
+    dims: np.ndarray            # (C, 3) a primitive's dimensions, as shape_msgs orders them
+    poses: np.ndarray           # (C, 4, 4) each set's pose in its body's frame
+    first: np.ndarray           # (C + 1,) the range of each POINTS set in ``points``
+    points: np.ndarray          # (N, 3) the hulls' vertices
+    adjacent_first: np.ndarray  # (N + 1,) the range of each vertex's neighbours in ``adjacent``
+    adjacent: np.ndarray        # the hulls' vertex graphs (global vertex indices)
+    climb: np.ndarray           # (C,) whether a hull's graph is climbed
+    cover: np.ndarray           # (bodies,) the set that holds each whole body
+    shape_first: np.ndarray     # (bodies + 1,) the range of each body's shapes' sets in shapes
+    shapes: np.ndarray          # the shapes' sets
+    piece_first: np.ndarray     # (C + 1,) the range of each set's pieces in ``pieces``
+    pieces: np.ndarray          # the pieces' sets (a mesh's hull: hulls of parts of it)
+    centres: np.ndarray         # (C, 3) the centre of a ball that holds each set (body frame)
+    radii: np.ndarray           # (C,) that ball's radius
+
+
 @dataclass(frozen=True, eq=False)
 class ConvexSet:
     """
-    Convex sets of bodies, as arrays: see the module docstring.
+    Convex sets of bodies: the kernels' arrays and what each set holds.
 
-    ``kinds`` (C,), ``dims`` (C, 3) as shape_msgs orders them, ``poses`` (C, 4, 4) in their
-    body's frame, ``first`` (C + 1,) the range of each POINTS set in ``points`` (N, 3),
-    ``adjacent_first`` (N + 1,) and ``adjacent`` the vertex graph of each point (global
-    indices), ``climb`` (C,) whether that graph is climbed, ``cover`` (bodies,) the convex set
-    that holds each body, ``shape_first`` (bodies + 1,) the range of each body's shapes' sets
-    in ``shapes``, ``piece_first`` (C + 1,) the range of each set's pieces in ``pieces`` (a
-    mesh's hull has the hulls of parts of its triangles as pieces), ``centres`` (C, 3) and
-    ``radii`` (C,) a ball (in the body's frame) that holds each set, ``origin`` (C, 3) what
-    each set holds: (body, shape, piece) with -1 for a body's cover and a shape's whole hull.
+    ``origin`` (C, 3): (body, shape, piece) of each set, -1 for a body's cover and for a
+    shape's whole hull.
     """
 
-    kinds: np.ndarray
-    dims: np.ndarray
-    poses: np.ndarray
-    first: np.ndarray
-    points: np.ndarray
-    adjacent_first: np.ndarray
-    adjacent: np.ndarray
-    climb: np.ndarray
-    cover: np.ndarray
-    shape_first: np.ndarray
-    shapes: np.ndarray
-    piece_first: np.ndarray
-    pieces: np.ndarray
-    centres: np.ndarray
-    radii: np.ndarray
+    arrays: ConvexArrays
     origin: np.ndarray
-
-    @property
-    def arrays(self) -> ConvexArrays:
-        """Return the arrays as the kernels take them."""
-        return ConvexArrays(*(getattr(self, name) for name in ConvexArrays._fields))
 
     @classmethod
     def build(cls, bodies: list[tuple[tuple | None, list[tuple]]]) -> ConvexSet:
@@ -106,33 +100,13 @@ class ConvexSet:
         ints = {name: np.array(getattr(out, name), dtype=np.int64) for name in (
             'kinds', 'first', 'adjacent_first', 'adjacent', 'cover', 'shape_first', 'shapes',
             'piece_first', 'pieces')}
-        return cls(dims=np.array(out.dims).reshape(-1, 3),
-                   poses=np.array(out.poses).reshape(-1, 4, 4),
-                   points=np.vstack(out.points) if out.points else np.zeros((0, 3)),
-                   climb=np.array(out.climb, dtype=np.bool_),
-                   centres=np.array(out.centres).reshape(-1, 3),
-                   radii=np.array(out.radii, dtype=float),
-                   origin=np.array(out.origin, dtype=np.int64).reshape(-1, 3), **ints)
-
-
-class ConvexArrays(NamedTuple):
-    """``ConvexSet``'s arrays as the kernels take them (its docstring says what each holds)."""
-
-    kinds: np.ndarray
-    dims: np.ndarray
-    poses: np.ndarray
-    first: np.ndarray
-    points: np.ndarray
-    adjacent_first: np.ndarray
-    adjacent: np.ndarray
-    climb: np.ndarray
-    cover: np.ndarray
-    shape_first: np.ndarray
-    shapes: np.ndarray
-    piece_first: np.ndarray
-    pieces: np.ndarray
-    centres: np.ndarray
-    radii: np.ndarray
+        return cls(ConvexArrays(
+            dims=np.array(out.dims).reshape(-1, 3), poses=np.array(out.poses).reshape(-1, 4, 4),
+            points=np.vstack(out.points) if out.points else np.zeros((0, 3)),
+            climb=np.array(out.climb, dtype=np.bool_),
+            centres=np.array(out.centres).reshape(-1, 3),
+            radii=np.array(out.radii, dtype=float), **ints),
+            origin=np.array(out.origin, dtype=np.int64).reshape(-1, 3))
 
 
 class _Lists:
