@@ -166,9 +166,9 @@ def check_pass(frames: LinkFrames, spheres: SphereBounds, convexes: ConvexArrays
     Go on with the check from instant k while the spheres and hulls decide every pair due.
 
     At each instant the pairs due (``due`` <= k) get their sphere bounds at the link poses
-    (``poses_at``, ``pair_lower_bounds``); a pair whose spheres
-    come within a grid step of its limit (or, with a finite ``margin``, below the least
-    clearance so far or within ``margin`` of this instant's least) gets the larger bound of
+    (``poses_at``, ``pair_lower_bounds``); a pair whose spheres come within a grid step of its
+    limit (or, with a finite ``margin``, below the least clearance so far or within ``margin``
+    of this instant's least) gets the larger bound of
     its convex sets (``convex.body_bound``: the link's hull, then its shapes'; for a possible
     least, the shapes' always). While none comes within a grid step of its limit they are
     scheduled (``write_next_checks``) and the check moves on to the next instant due. Returns

@@ -71,10 +71,11 @@ def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
     named by a hash of the files' bytes (which determine it) beside the kernels' cache, and
     read from there by later processes.
     """
+    sources = _sources(folders)
     raw = hashlib.sha256(_version().encode())
-    for name, path in _sources(folders):
+    for name, data in sources:
         raw.update(name.encode())
-        raw.update(path.read_bytes())
+        raw.update(data)
     memo = _memo_folder() / f'trajplan_core_stamp_{raw.hexdigest()[:32]}'
     try:
         kept = memo.read_text(encoding='ascii')
@@ -83,9 +84,9 @@ def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
     except (OSError, UnicodeDecodeError):
         pass
     digest = hashlib.sha256(_version().encode())
-    for name, path in _sources(folders):
+    for name, data in sources:
         digest.update(name.encode())
-        digest.update(_code(path).encode())
+        digest.update(_code(data, name).encode())
     stamp = digest.hexdigest()
     try:                                     # whole or not at all: another process may read
         memo.parent.mkdir(parents=True, exist_ok=True)
@@ -97,9 +98,9 @@ def core_stamp(folders: tuple[Path, ...] = CORE) -> str:
     return stamp
 
 
-def _sources(folders: tuple[Path, ...]) -> list[tuple[str, Path]]:
-    """Return every ``.py`` file under ``folders`` with its name there, in a fixed order."""
-    return [(str(path.relative_to(folder.parent)), path)
+def _sources(folders: tuple[Path, ...]) -> list[tuple[str, bytes]]:
+    """Return every ``.py`` file under ``folders``: its name there and bytes, in a fixed order."""
+    return [(str(path.relative_to(folder.parent)), path.read_bytes())
             for folder in folders for path in sorted(folder.rglob('*.py'))]
 
 
@@ -108,9 +109,9 @@ def _memo_folder() -> Path:
     return Path(numba.config.CACHE_DIR or CORE[0].parent / '__pycache__')
 
 
-def _code(path: Path) -> str:
+def _code(source: bytes, name: str) -> str:
     """Return a file's syntax tree without docstrings (comments are not in it), as text."""
-    tree = ast.parse(path.read_bytes(), filename=str(path))
+    tree = ast.parse(source, filename=name)
     for node in ast.walk(tree):
         if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
             first = node.body[0] if node.body else None
@@ -174,6 +175,9 @@ def inlined_kernel(func: Callable[..., Any]) -> Any:
     numba builds every kernel called from another as a library of its own, and optimises each
     caller's machine code anew with all its callees linked in: a helper called by one kernel
     only (a step of that kernel's computation) would cost seconds of compile for nothing.
+    Keep inlining one level deep: numba inlines by copying the callee's code into the caller
+    block by block, each copy with the caller's whole scope, so inlined kernels that inline
+    others into large callers cost minutes (the convex bounds nested three deep: 436 s).
     """
     return _compiled(func, 'always')
 

@@ -174,7 +174,8 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     common = {'goal': r.goal, 'algorithm': r.algorithm, 'mode': r.mode.value,
               'angular_velocity': float(r.angular_velocity), 'motion': r.motion}
     try:
-        obj = Objective(arm, r.goal, _start_angles(arm, r.start), mode=r.mode,
+        start = r.start if r.start is not None else np.zeros(arm.n_joints)    # upright: q = 0
+        obj = Objective(arm, r.goal, start, mode=r.mode,
                         omega=r.angular_velocity, shaping=r.shaping, profile=r.motion)
         _check_world(r.world, obj.goal)
         common.update(joint_names=tuple(arm.joint_names),
@@ -190,11 +191,6 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     return _collision_free(result, obj, r.world, r.seed, r.tolerance, clock)
 
 
-def _start_angles(arm: ArmModel, start: Sequence[float] | None) -> np.ndarray:
-    """Return the start as an array of joint angles: the upright pose q = 0 when None."""
-    return np.zeros(arm.n_joints) if start is None else np.asarray(start, dtype=float).ravel()
-
-
 def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:
     """Refuse a goal inside an obstacle (InvalidRequest)."""
     inside = None if world is None else world.obstacle_at(goal)
@@ -207,9 +203,8 @@ def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
                     clock: float) -> PlanResult:
     """Return a reached plan moved to the fastest free motion found, or NOT_REACHED."""
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    law = result.profile.time_law(world.arm.geometry.arm, result.omega)
     x0 = result.joint_goal[:obj.arm.planned]
-    found = free_joint_goal(obj, world, law, result.profile.timing, x0, rng, tolerance)
+    found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng, tolerance)
     result.clearance_m, result.clearance_pair = found.clearance.clearance, found.clearance.pair
     clear = found.clearance
     start_note = (f'; it starts within the padding ({clear.start_within}) and comes no closer'
