@@ -49,7 +49,7 @@ _LOG = logging.getLogger('trajplan_ros')
 CORE = tuple(Path(__file__).resolve().parents[1] / name
              for name in ('kinematics', 'motion', 'collision', 'search', 'planning'))
 #: How long compiling every kernel takes (doc/benchmarks.md: the first start).
-FIRST_COMPILE = 'about a minute and a half on two idle cores, longer on a busy machine'
+FIRST_COMPILE = 'about two minutes on two idle cores, longer on a busy machine'
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
