@@ -86,7 +86,8 @@ def test_each_joint_takes_its_own_limit_then_the_setting_and_omega_caps_velocity
                                       max_acceleration=4.0, max_jerk=50.0)
     law = profile.time_law(arm, omega=0.2)
     assert law.kind == JERK_LIMITED
-    np.testing.assert_array_equal(law.velocity, [0.1, 0.2, 0.2, 0.2, 0.2])
+    # the file's default_velocity_scaling_factor 0.1 scales every velocity limit
+    np.testing.assert_allclose(law.velocity, 0.1 * np.array([0.1, 0.2, 0.2, 0.2, 0.2]))
     np.testing.assert_array_equal(law.acceleration, [2.0, 1.5, 4.0, 4.0, 4.0])
     np.testing.assert_array_equal(law.jerk, [50.0, 30.0, 50.0, 50.0, 50.0])
     trapezoidal = MotionProfile('trapezoidal', max_acceleration=4.0).time_law(arm, 0.2)
@@ -99,7 +100,7 @@ def test_the_urdf_velocity_counts_unless_the_file_sets_one(tmp_path: Path) -> No
                            velocity=[0.05, 0.05, 1.0, 0.1, 1.0], planned=4)
     law = MotionProfile.from_file(write(tmp_path, LIMITS)).time_law(arm, omega=0.2)
     assert law.kind == SERVO
-    np.testing.assert_array_equal(law.velocity, [0.1, 0.05, 0.2, 0.1, 0.2])   # file, URDF, omega
+    np.testing.assert_allclose(law.velocity, 0.1 * np.array([0.1, 0.05, 0.2, 0.1, 0.2]))
     np.testing.assert_array_equal(law.acceleration, np.inf)
 
 
@@ -116,10 +117,42 @@ def test_a_profile_without_the_limits_it_needs_is_refused_naming_the_joint(
         plan([0.15, 0.19, 0.17], motion=MotionProfile('jerk_limited', max_acceleration=1.0))
 
 
-def test_limits_of_a_joint_the_arm_does_not_have_are_refused() -> None:
-    profile = MotionProfile(joint_limits={'panda_joint1': JointLimits(acceleration=1.0)})
-    with pytest.raises(ValueError, match='name 1 joint.* the arm does not have: panda_joint1'):
-        profile.time_law(paper_arm(), 0.2)
+def test_limits_of_a_joint_the_arm_does_not_have_are_ignored_and_named() -> None:
+    gripper = {'gripper': JointLimits(velocity=1.0, acceleration=1.0)}
+    profile = MotionProfile('trapezoidal', max_acceleration=2.0, joint_limits=gripper)
+    assert profile.ignored_joints(paper_arm()) == ['gripper']
+    law = profile.time_law(paper_arm(), 0.2)
+    plain = MotionProfile('trapezoidal', max_acceleration=2.0).time_law(paper_arm(), 0.2)
+    for mine, expected in zip(law, plain):
+        np.testing.assert_array_equal(mine, expected)
+
+
+def test_scaling_factors_scale_velocity_and_acceleration_as_moveit_does(
+        tmp_path: Path) -> None:
+    """A request's scaling wins over the file's default; jerk is not scaled; (0, 1] only."""
+    arm = paper_arm()
+    path = write(tmp_path, LIMITS.replace('default_velocity_scaling_factor: 0.1',
+                                          'default_velocity_scaling_factor: 0.1\n'
+                                          'default_acceleration_scaling_factor: 0.5'))
+    settings = {'profile': 'jerk_limited', 'max_acceleration': 4.0, 'max_jerk': 50.0}
+    full = MotionProfile.from_file(path, velocity_scaling=1.0, acceleration_scaling=1.0,
+                                   **settings).time_law(arm, 0.2)
+    by_file = MotionProfile.from_file(path, **settings)
+    assert (by_file.velocity_scaling, by_file.acceleration_scaling) == (0.1, 0.5)
+    law = by_file.time_law(arm, 0.2)
+    np.testing.assert_allclose(law.velocity, 0.1 * full.velocity)
+    np.testing.assert_allclose(law.acceleration, 0.5 * full.acceleration)
+    np.testing.assert_array_equal(law.jerk, full.jerk)
+    mine = MotionProfile.from_file(path, velocity_scaling=0.3, **settings)
+    assert (mine.velocity_scaling, mine.acceleration_scaling) == (0.3, 0.5)
+    assert mine.describe() == 'jerk_limited, independent, velocity x0.3, acceleration x0.5'
+    for bad in (0.0, 1.5, float('nan')):
+        with pytest.raises(ValueError, match='velocity_scaling'):
+            MotionProfile(velocity_scaling=bad)
+    # plan() takes them as keywords: half the speed, twice the servo motion time
+    fast, slow = plan([0.15, 0.19, 0.17], seed=1), plan([0.15, 0.19, 0.17], seed=1,
+                                                        velocity_scaling=0.5)
+    assert slow.motion_time_s == pytest.approx(2 * fast.motion_time_s, rel=1e-9)
 
 
 @pytest.mark.parametrize('settings, reason', [

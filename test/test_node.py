@@ -251,7 +251,7 @@ def test_every_goal_and_call_has_one_outcome_with_its_reason(start_node, peer) -
     level, message, values = by_stamp['7.000000011']
     assert (level, values['status']) == (DiagnosticStatus.ERROR, 'refused')
     assert values['request'] == 'service call'
-    assert "in frame 'world'" in message
+    assert "frame 'world' is not a link of the robot" in message
     assert (values['x'], values['y'], values['z']) == ('0.2', '0.1', '0.15')
     assert by_stamp['8.000000000'][2]['status'] == 'refused'
     assert 'tolerance -1.0 m is not allowed' in by_stamp['8.000000000'][1]

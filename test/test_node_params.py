@@ -105,7 +105,7 @@ def test_a_valid_change_takes_effect_for_the_next_plan(planner, peer, trajectori
     ('angular_velocity', 'fast', r'Wrong parameter type'),
     ('population', 1, r'out of range'),
     ('sample_period', -0.1, r'out of range'),
-    ('mode', 'sideways', r"mode must be one of free, radial, got 'sideways'"),
+    ('mode', 'sideways', r"mode must be one of free, radial, approach, got 'sideways'"),
     ('algorithm', 'sgd', r'algorithm must be one of iepso, '),
     ('base_frame', '', r'base_frame must not be empty'),
     ('arm.lower', [3.0, -1.5, -2.3, -2.3, -3.1], r'joint 1: lower limit 3.0 is above upper limit'),

@@ -188,8 +188,8 @@ def test_refusals_before_planning(lone_node, peer) -> None:
     request = plan_request((0.2, 0.1, 0.15))
     request.goal.header.frame_id = 'map'
     assert list(peer.call(GetPlan, f'{ns}/plan_trajectory', request).plan.poses) == []
-    lone_node.wait_for(r"refused: the goal is in frame 'map', but this node plans in base_frame "
-                       r"'base_link'")
+    lone_node.wait_for(r"refused: frame 'map' is not a link of the robot; known frames: "
+                       r'base_link, ')
     request.goal.header.frame_id = 'base_link'                       # our frame: planned
     assert ends_at(peer.call(GetPlan, f'{ns}/plan_trajectory', request).plan, (0.2, 0.1, 0.15))
     assert 'Traceback' not in lone_node.output and 'ERROR' not in lone_node.output

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any, Iterator
 
-from geometry_msgs.msg import PointStamped
+from geometry_msgs.msg import PointStamped, PoseStamped
 from hostile_urdf import BILLION_LAUGHS
 from nav_msgs.srv import GetPlan
 from node_under_test import (check_servo_trajectory, fmt, NodeProcess, started_from,
@@ -108,8 +108,8 @@ def test_a_bad_description_is_refused_and_the_arm_kept(planner, describe, peer,
     assert tuple(trajectory_to(trajectories, goal, arm=ARM).joint_names) == ARM.joint_names
 
 
-def test_clicked_points_in_the_base_frame_are_goals(planner, describe, peer,
-                                                    trajectories) -> None:
+def test_clicked_points_in_a_frame_of_the_robot_are_goals(
+        planner, describe, peer, trajectories) -> None:
     describe(SO101.urdf.read_text(encoding='utf-8'))
     goal = _goal(3)
     mark = planner.mark()
@@ -117,14 +117,72 @@ def test_clicked_points_in_the_base_frame_are_goals(planner, describe, peer,
     elsewhere.header.frame_id = 'world'
     elsewhere.point.x, elsewhere.point.y, elsewhere.point.z = goal
     peer.publish(PointStamped, f'{NS}/clicked_point', elsewhere)
-    planner.wait_for(rf"clicked_point #\d+ {fmt(goal)} m: refused: it is in frame 'world', but "
-                     r"this node plans in base_frame 'base_link'", mark)
+    planner.wait_for(rf"clicked_point #\d+ {fmt(goal)} m: refused: frame 'world' is not a link "
+                     r'of the robot; known frames: base_link, gripper_frame_link', mark)
     clicked = PointStamped()
     clicked.header.frame_id = 'base_link'
     clicked.point = elsewhere.point
     peer.publish(PointStamped, f'{NS}/clicked_point', clicked)
-    planner.wait_for(rf'goal #\d+ {fmt(goal)} m from q = .*: reached', mark)
+    planner.wait_for(rf'clicked_point #\d+ {fmt(goal)} m from q = .*: reached', mark)
     trajectory_to(trajectories, goal, arm=ARM)
+
+
+def test_a_goal_pose_in_a_root_frame_above_the_base_is_planned_in_the_base(
+        planner, describe, peer, trajectories) -> None:
+    """As the SO-ARM packages describe it: a world link above base_link, 0.1 m off."""
+    text = SO101.urdf.read_text(encoding='utf-8')
+    world = ('<link name="world"/><joint name="world_to_base" type="fixed"><parent link="world"/>'
+             '<child link="base_link"/><origin xyz="0.1 0 0.05" rpy="0 0 0"/></joint>')
+    describe(text.replace('<link name="base_link"', world + '<link name="base_link"', 1))
+    goal = _goal(4)
+    mark = planner.mark()
+    pose = PoseStamped()
+    pose.header.frame_id = 'world'
+    pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = (
+        goal[0] + 0.1, goal[1], goal[2] + 0.05)
+    peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
+    planner.wait_for(rf"goal_pose #\d+ {fmt(goal)} m \(in 'world': .*\) from q = .*: reached",
+                     mark)
+    trajectory_to(trajectories, goal, arm=ARM)
+    pose.header.frame_id = 'camera_link'
+    peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
+    planner.wait_for(r"goal_pose #\d+ .* refused: frame 'camera_link' is not a link of the "
+                     r'robot; known frames: base_link, .*world', mark)
+
+
+def test_compute_plan_answers_and_publishes_nothing(
+        planner, describe, peer, trajectories) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    looked, moved = _goal(5), _goal(6)
+    mark = planner.mark()
+    answer = peer.call(GetPlan, f'{NS}/compute_plan', plan_request(looked))
+    assert answer.plan.poses                                  # the plan, to look at
+    planner.wait_for(rf'compute_plan call #\d+ {fmt(looked)} m .* answered, not sent', mark)
+    assert peer.call(GetPlan, f'{NS}/plan_trajectory', plan_request(moved)).plan.poses
+    ends = []                           # every trajectory published up to the second goal's
+    while not ends or np.linalg.norm(ends[-1] - moved) > 1e-5:
+        msg = trajectories.get(timeout=30.0)
+        ends.append(ARM.tool(np.array(msg.points[-1].positions)[None])[0][0])
+    assert all(np.linalg.norm(end - looked) > 1e-5 for end in ends)
+
+
+def test_a_moveit_joint_limits_file_with_the_gripper_is_taken_with_a_warning(
+        planner, describe, peer, tmp_path) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    limits = tmp_path / 'joint_limits.yaml'
+    limits.write_text('default_velocity_scaling_factor: 0.1\n'
+                      'default_acceleration_scaling_factor: 0.5\njoint_limits:\n' + ''.join(
+                          f'  {name}:\n    has_velocity_limits: true\n    max_velocity: 10\n'
+                          '    has_acceleration_limits: true\n    max_acceleration: 10\n'
+                          '    has_jerk_limits: false\n'
+                          for name in (*ARM.joint_names, 'gripper')), encoding='utf-8')
+    mark = planner.mark()
+    results = peer.set_parameters(f'{NS}/trajplan', [
+        Parameter('joint_limits_file', value=str(limits))])
+    assert results[0].successful, results[0].reason
+    planner.wait_for(r'joint_limits_file: joints gripper are not in the planned chain', mark)
+    results = peer.set_parameters(f'{NS}/trajplan', [Parameter('joint_limits_file', value='')])
+    assert results[0].successful
 
 
 def test_start_positions_must_match_the_chain(planner, describe, peer: RosClient) -> None:

@@ -22,7 +22,7 @@ from trajplan_ros.tools.bench.reference import _solutions, radial_angle
 TARGET = PAPER_TARGET.tolist()
 #: Inside the reach sphere but out of reach: IEPSO searches it for dozens of iterations.
 FAR = [0.36, 0.0, 0.05]
-KEYS = {'goal', 'success', 'status', 'joint_goal', 'position_error_m', 'radial_error_rad',
+KEYS = {'goal', 'success', 'status', 'joint_goal', 'position_error_m', 'axis_error_rad',
         'motion_time_s', 'efficiency', 'iterations', 'evaluations', 'plan_time_s', 'algorithm',
         'mode', 'profile', 'timing', 'clearance_m', 'clearance_pair', 'message'}
 
@@ -53,7 +53,7 @@ def test_to_dict_of_a_succeeded_plan_carries_its_values():
     assert record['joint_goal'] == result.joint_goal.tolist() and len(record['joint_goal']) == 5
     for key in ('position_error_m', 'motion_time_s', 'efficiency', 'plan_time_s'):
         assert record[key] == getattr(result, key) and isinstance(record[key], float)
-    assert record['radial_error_rad'] is None                     # NaN in free mode
+    assert record['axis_error_rad'] is None                     # NaN in free mode
     assert record['iterations'] == result.iterations > 0
     assert record['evaluations'] == result.evaluations > 0
     assert (record['algorithm'], record['mode']) == ('iepso', 'free')
@@ -67,7 +67,7 @@ def test_to_dict_of_a_rejected_plan_turns_nan_into_none():
     assert record['goal'] == [None, 0.1, 0.2]
     assert record['success'] is False and record['status'] == 'rejected'
     assert record['joint_goal'] is None
-    for key in ('position_error_m', 'radial_error_rad', 'motion_time_s', 'efficiency'):
+    for key in ('position_error_m', 'axis_error_rad', 'motion_time_s', 'efficiency'):
         assert record[key] is None
     assert record['iterations'] == record['evaluations'] == 0
     assert record['plan_time_s'] == result.plan_time_s
@@ -141,7 +141,8 @@ def test_a_request_is_checked_with_one_line_reasons() -> None:
             good.replace(**change).validate()
         with pytest.raises(ValueError, match=reason):
             plan(good.replace(**change))
-    with pytest.raises(ValueError, match="mode must be one of free, radial, got 'sideways'"):
+    with pytest.raises(ValueError,
+                       match="mode must be one of free, radial, approach, got 'sideways'"):
         PlanRequest(TARGET, mode='sideways')
     with pytest.raises(TypeError, match='unknown setting.* omeg; a plan takes algorithm'):
         plan(TARGET, omeg=1.0)
@@ -281,7 +282,7 @@ def test_a_start_gives_every_joint_or_the_planned_ones() -> None:
 
 def test_radial_puts_the_tool_axis_on_the_goal_ray_pointing_outward() -> None:
     result = plan(TARGET, mode='radial', seed=0)
-    assert result.success and result.radial_error_rad <= 1e-9
+    assert result.success and result.axis_error_rad <= 1e-9
     p, u = paper_arm().tool(result.joint_goal[None, :])
     ray = PAPER_TARGET / np.linalg.norm(PAPER_TARGET)
     assert u[0] @ ray == pytest.approx(1.0, abs=1e-12)
@@ -302,7 +303,7 @@ def test_a_mirrored_pose_is_an_axis_error_of_twice_the_goal_angle() -> None:
     inward = obj.axis_angle(-goal[None, :] / np.linalg.norm(goal))
     assert inward[0] == pytest.approx(np.pi)                        # pointing at the base: pi
     result = plan(goal, mode='radial', seed=0)
-    assert result.success and result.radial_error_rad < 1e-9
+    assert result.success and result.axis_error_rad < 1e-9
 
 
 def test_a_goal_without_a_radial_pose_is_not_reached() -> None:
@@ -312,7 +313,7 @@ def test_a_goal_without_a_radial_pose_is_not_reached() -> None:
         result = plan(case.goal, case.start, mode='radial', seed=case.seed)
         assert result.status is PlanStatus.NOT_REACHED, case.goal
         assert 'goal ray' in result.message
-        assert result.radial_error_rad > 1e-6 or result.position_error_m > 1e-6
+        assert result.axis_error_rad > 1e-6 or result.position_error_m > 1e-6
 
 
 @pytest.mark.parametrize('mode', ['free', 'radial'])

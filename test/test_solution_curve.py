@@ -25,7 +25,7 @@ def test_the_curve_is_the_one_with_one_free_direction() -> None:
     free = Objective(ARM, TARGET, np.zeros(5))
     assert curve_constraint(free) is free                       # 4 joints, 3 equations
     radial = curve_constraint(Objective(ARM, TARGET, np.zeros(5), mode='radial'))
-    assert radial is not None and radial.radial                 # isolated: the position curve
+    assert radial is not None and radial.holds_axis                # isolated: the position curve
     assert radial.residuals(*radial.tool(np.zeros((1, 4)))).shape == (1, 3)
     goal = SIX.tool(np.full((1, 6), 0.3))[0][0]
     assert curve_constraint(Objective(SIX, goal, np.zeros(6))) is None     # a 3-D set

@@ -20,6 +20,13 @@ servo angular velocity (``angular_velocity``). Acceleration and jerk: a
 ``joint_limits.yaml`` in MoveIt's format (``read_joint_limits``), which also overrides the
 URDF's velocity where it sets one; then ``max_acceleration`` / ``max_jerk`` for every joint
 without its own. A profile that needs a limit no source gives is refused, naming the joint.
+Joints of the file that the arm does not plan (a MoveIt config lists the gripper too) are
+ignored; ``ignored_joints`` names them, for a warning.
+
+``velocity_scaling`` and ``acceleration_scaling`` in (0, 1] scale the velocity and the
+acceleration limits, as MoveIt's ``max_velocity_scaling_factor`` and
+``max_acceleration_scaling_factor`` do; a joint_limits.yaml's ``default_velocity_scaling_factor``
+and ``default_acceleration_scaling_factor`` are their defaults (``from_file``; 1 without).
 """
 from __future__ import annotations
 
@@ -35,6 +42,10 @@ from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TimeLaw, TRAPEZOID
 import yaml
 
 __all__ = ['JointLimits', 'MotionProfile', 'Profile', 'Timing', 'read_joint_limits']
+
+#: The keys of a joint_limits.yaml's default scaling factors, by ``MotionProfile`` field.
+SCALING_KEYS = {'velocity_scaling': 'default_velocity_scaling_factor',
+                'acceleration_scaling': 'default_acceleration_scaling_factor'}
 
 
 class Profile(str, Enum):
@@ -115,6 +126,11 @@ def read_joint_limits(path: str | Path) -> dict[str, JointLimits]:
     false or missing is ignored). Raises ValueError with a one-line reason for a file that
     cannot be read or parsed, or a limit that is not a finite positive number.
     """
+    return _read_limits_file(path)[0]
+
+
+def _read_limits_file(path: str | Path) -> tuple[dict[str, JointLimits], dict[str, float]]:
+    """Return a joint_limits.yaml's joints' limits and its default scaling factors (by field)."""
     try:
         data = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
     except OSError as exc:
@@ -129,7 +145,17 @@ def read_joint_limits(path: str | Path) -> dict[str, JointLimits]:
     joints = data.get('joint_limits') if isinstance(data, Mapping) else None
     if not isinstance(joints, Mapping):
         raise ValueError(f'joint limits {path} has no joint_limits: mapping (MoveIt format)')
-    return {str(name): _joint_entry(str(name), entry) for name, entry in joints.items()}
+    scaling = {name: _scaling(data[key], f'{path}: {key}')
+               for name, key in SCALING_KEYS.items() if key in data}
+    return {str(name): _joint_entry(str(name), entry) for name, entry in joints.items()}, scaling
+
+
+def _scaling(value: Any, what: str) -> float:
+    """Return a scaling factor, or raise ValueError unless it is a number in (0, 1]."""
+    factor = _positive(value, what)
+    if factor > 1.0:
+        raise ValueError(f'{what} must be in (0, 1], got {value!r}')
+    return factor
 
 
 @dataclass(frozen=True)
@@ -142,6 +168,8 @@ class MotionProfile:
     :param max_acceleration: rad/s^2 for every joint that ``joint_limits`` gives none.
     :param max_jerk: rad/s^3 for every joint that ``joint_limits`` gives none.
     :param joint_limits: joint name -> its limits (``read_joint_limits``).
+    :param velocity_scaling: in (0, 1]: every velocity limit (and ``angular_velocity``) times it.
+    :param acceleration_scaling: in (0, 1]: every acceleration limit times it.
     """
 
     profile: Profile | str = Profile.SERVO
@@ -149,6 +177,8 @@ class MotionProfile:
     max_acceleration: float | None = None
     max_jerk: float | None = None
     joint_limits: Mapping[str, JointLimits] = field(default_factory=dict)
+    velocity_scaling: float = 1.0
+    acceleration_scaling: float = 1.0
 
     def __post_init__(self) -> None:
         """Check the settings; raise ValueError with the reason."""
@@ -163,27 +193,35 @@ class MotionProfile:
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, _positive(value, name))
+        for name in SCALING_KEYS:
+            object.__setattr__(self, name, _scaling(getattr(self, name), name))
 
     @classmethod
     def from_file(cls, joint_limits: str | Path | None, **settings: Any) -> MotionProfile:
-        """Return the profile with ``settings`` and the limits of a joint_limits.yaml (or none)."""
-        limits = read_joint_limits(joint_limits) if joint_limits else {}
-        return cls(joint_limits=limits, **settings)
+        """
+        Return the profile with ``settings`` and the limits of a joint_limits.yaml (or none).
+
+        A scaling factor that ``settings`` leaves out (or gives as None) is the file's default.
+        """
+        limits, scaling = _read_limits_file(joint_limits) if joint_limits else ({}, {})
+        given = {k: v for k, v in settings.items() if v is not None or k not in SCALING_KEYS}
+        return cls(joint_limits=limits, **{**scaling, **given})
+
+    def ignored_joints(self, arm: ArmModel) -> list[str]:
+        """Return the joints of ``joint_limits`` that the arm does not have (they are ignored)."""
+        return sorted(set(self.joint_limits) - set(arm.joint_names))
 
     def time_law(self, arm: ArmModel, omega: float) -> TimeLaw:
         """
         Return every joint's time law on ``arm`` at servo angular velocity ``omega`` (rad/s).
 
-        Raises ValueError naming the joint when ``joint_limits`` names a joint the arm does not
-        have, or the profile needs a limit that no source gives.
+        The scaling factors apply to the velocity and acceleration limits. Raises ValueError
+        naming the joint when the profile needs a limit that no source gives.
         """
-        unknown = sorted(set(self.joint_limits) - set(arm.joint_names))
-        if unknown:
-            raise ValueError(f'joint limits name {len(unknown)} joint(s) the arm does not have: '
-                             f"{', '.join(unknown)} (joints: {', '.join(arm.joint_names)})")
         own = [self.joint_limits.get(name, JointLimits()) for name in arm.joint_names]
         urdf = np.asarray(arm.velocity, dtype=float)
-        velocity = np.minimum(float(omega), [v.velocity or u for v, u in zip(own, urdf)])
+        velocity = self.velocity_scaling * np.minimum(
+            float(omega), [v.velocity or u for v, u in zip(own, urdf)])
         settings = {'acceleration': self.max_acceleration, 'jerk': self.max_jerk}
         limits = {'acceleration': np.full(len(own), np.inf), 'jerk': np.full(len(own), np.inf)}
         for quantity in _NEEDS[self.profile]:
@@ -195,8 +233,11 @@ class MotionProfile:
                     f'limit for joint {missing[0]}: none in the joint limits and no '
                     f'max_{quantity} given')
             limits[quantity] = np.array(values, dtype=float)
+        limits['acceleration'] = self.acceleration_scaling * limits['acceleration']
         return TimeLaw(_KIND[self.profile], velocity, limits['acceleration'], limits['jerk'])
 
     def describe(self) -> str:
         """Return the profile and timing in a few words, e.g. ``trapezoidal, synchronized``."""
-        return f'{self.profile.value}, {self.timing.value}'
+        scaled = [f'{name.split("_")[0]} x{value:g}' for name in SCALING_KEYS
+                  if (value := getattr(self, name)) != 1.0]
+        return ', '.join([self.profile.value, self.timing.value] + scaled)

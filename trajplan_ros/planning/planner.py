@@ -50,8 +50,8 @@ _clock: Callable[[], float] = time.monotonic
 class PlanStatus(str, Enum):
     """How a planning request ended."""
 
-    SUCCEEDED = 'succeeded'        # reached within tolerance (and radial within axis_tolerance)
-    NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal or the ray
+    SUCCEEDED = 'succeeded'        # reached within tolerance (the axis within axis_tolerance)
+    NOT_REACHED = 'not_reached'    # optimised, but the best answer misses the goal or the axis
     REJECTED = 'rejected'          # refused before optimisation (bad goal or start)
     TIMED_OUT = 'timed_out'        # ended at max_planning_time, with the best answer so far
     CANCELLED = 'cancelled'        # ended by the caller's stop hook, with the best answer so far
@@ -67,7 +67,7 @@ class PlanResult:
     start: np.ndarray | None
     joint_goal: np.ndarray | None = None
     position_error_m: float = float('nan')
-    radial_error_rad: float = float('nan')        # angle of the tool axis to the goal ray
+    axis_error_rad: float = float('nan')          # angle of the tool axis to its target
     motion_time_s: float = float('nan')
     efficiency: float = float('nan')
     iterations: int = 0
@@ -88,6 +88,11 @@ class PlanResult:
     def omega(self) -> float:
         """Return ``angular_velocity`` (its earlier name, kept for callers)."""
         return self.angular_velocity
+
+    @property
+    def radial_error_rad(self) -> float:
+        """Return ``axis_error_rad`` (its name from when only radial mode held the axis)."""
+        return self.axis_error_rad
 
     @property
     def profile(self) -> MotionProfile:
@@ -133,7 +138,7 @@ class PlanResult:
             'status': self.status.value,
             'joint_goal': None if self.joint_goal is None else [float(v) for v in self.joint_goal],
             'position_error_m': num(self.position_error_m),
-            'radial_error_rad': num(self.radial_error_rad),
+            'axis_error_rad': num(self.axis_error_rad),
             'motion_time_s': num(self.motion_time_s),
             'efficiency': num(self.efficiency),
             'iterations': self.iterations,
@@ -175,20 +180,53 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
               'angular_velocity': float(r.angular_velocity), 'motion': r.motion}
     try:
         start = r.start if r.start is not None else np.zeros(arm.n_joints)    # upright: q = 0
-        obj = Objective(arm, r.goal, start, mode=r.mode,
-                        omega=r.angular_velocity, shaping=r.shaping, profile=r.motion)
+        obj = Objective(arm, r.goal, start, mode=r.mode, omega=r.angular_velocity,
+                        shaping=r.shaping, profile=r.motion, approach=r.approach,
+                        start_margin=r.start_limit_margin)
         _check_world(r.world, obj.goal)
         common.update(joint_names=tuple(arm.joint_names),
                       law=r.motion.time_law(arm, r.angular_velocity))
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
-    found = ALGORITHMS[r.algorithm](obj, population=r.population, max_iter=r.max_iterations,
-                                    tol=r.convergence_precision, seed=r.seed,
-                                    interrupt=interrupt, **r.optimizer_options)
+    obj, found = _search(obj, r, interrupt)
     result = _outcome(obj, found, r, clock, common)
+    if obj.start_notes:
+        result.message += f"; {'; '.join(obj.start_notes)}: the motion brings it inside"
     if r.world is None or not result.success:
         return result
     return _collision_free(result, obj, r.world, r.seed, r.tolerance, clock)
+
+
+#: Approach mode on arms of at most this many planned joints first holds one axis component.
+_SMALL_ARM = 5
+
+
+def _search(obj: Objective, r: PlanRequest,
+            interrupt: Interrupt | None) -> tuple[Objective, OptimizeResult]:
+    """
+    Run the request's optimiser on ``obj``; return the objective searched and what it found.
+
+    Approach mode on a small arm (``_SMALL_ARM`` planned joints or fewer) first holds only the
+    tool axis's component in the goal's vertical plane. A pan-and-pitch arm such as the SO-101
+    cannot turn the other one at all where its axis points down (its pitch joints turn in that
+    plane, its pan and roll axes lie along the axis), so holding both makes a singular system
+    whose search ends far from the fastest pose. The answer stands when the other component is
+    within ``axis_tolerance`` too (it is then the fastest of a larger set); else the search
+    holds both.
+    """
+    def search(objective: Objective) -> OptimizeResult:
+        return ALGORITHMS[r.algorithm](objective, population=r.population,
+                                       max_iter=r.max_iterations, tol=r.convergence_precision,
+                                       seed=r.seed, interrupt=interrupt, **r.optimizer_options)
+
+    if obj.mode is Mode.APPROACH and obj.arm.planned <= _SMALL_ARM:
+        one = obj.holding(1)
+        found = search(one)
+        p, u = one.tool(found.x[None])
+        if (found.interrupted is not None or (np.linalg.norm(p[0] - obj.goal) <= r.tolerance
+                                              and one.axis_angle(u)[0] <= r.axis_limit)):
+            return one, found
+    return obj, search(obj)
 
 
 def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:
@@ -261,9 +299,13 @@ def describe_residual(value: float, unit: str) -> str:
     return f'0 {unit}' if abs(value) < ROUNDING_FLOOR else f'{value:.3g} {unit}'
 
 
-def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float,
-            axis_err: float) -> tuple[PlanStatus, str]:
-    """Return the status of a search and its one-line reason (axis_err NaN in free mode)."""
+def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float, axis_err: float,
+            target: str) -> tuple[PlanStatus, str]:
+    """
+    Return the status of a search and its one-line reason.
+
+    ``axis_err``: the tool axis's angle from ``target`` (its name), NaN in free mode.
+    """
     if found.interrupted == PlanStatus.TIMED_OUT:
         return PlanStatus.TIMED_OUT, (f'planning ran past max_planning_time '
                                       f'{limits.max_planning_time:g} s; best position error '
@@ -271,14 +313,15 @@ def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float,
     if found.interrupted == PlanStatus.CANCELLED:
         return PlanStatus.CANCELLED, 'planning stopped before the end'
     axis = ('' if np.isnan(axis_err) else
-            f", axis {describe_residual(axis_err, 'rad')} from the goal ray")
+            f", axis {describe_residual(axis_err, 'rad')} from {target}")
     if pos_err > limits.tolerance:
         return PlanStatus.NOT_REACHED, (f'goal not reached: best position error {pos_err:.3g} m '
                                         f'is above the tolerance {limits.tolerance:.3g} m{axis}')
-    if axis_err > limits.axis_tolerance:
+    if axis_err > limits.axis_limit:
         return PlanStatus.NOT_REACHED, (
-            f'no radial pose found: the best tool axis is {axis_err:.3g} rad from the goal ray '
-            f'(axis_tolerance {limits.axis_tolerance:.3g} rad), position error {pos_err:.3g} m')
+            f'no {limits.mode.value} pose found: the best tool axis is {axis_err:.3g} rad from '
+            f'{target} (axis_tolerance {limits.axis_limit:.3g} rad), position error '
+            f'{pos_err:.3g} m')
     return (PlanStatus.SUCCEEDED,
             f'reached in {found.motion_time:.4f} s of motion, error '
             f"{describe_residual(pos_err, 'm')}{axis}")
@@ -290,11 +333,11 @@ def _outcome(obj: Objective, found: OptimizeResult, request: PlanRequest, clock:
     joint_goal = obj.full(found.x)[0]
     p, u = obj.arm.tool(joint_goal[None, :])
     pos_err = float(np.linalg.norm(p[0] - obj.goal))
-    axis_err = float(obj.axis_angle(u)[0]) if obj.radial else float('nan')
-    status, message = _status(found, request, pos_err, axis_err)
+    axis_err = float(obj.axis_angle(u)[0]) if obj.holds_axis else float('nan')
+    status, message = _status(found, request, pos_err, axis_err, obj.target_name)
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
-        radial_error_rad=axis_err, motion_time_s=found.motion_time, efficiency=found.fun,
+        axis_error_rad=axis_err, motion_time_s=found.motion_time, efficiency=found.fun,
         iterations=found.nit, evaluations=found.nfev, plan_time_s=time.perf_counter() - clock,
         history_efficiency=found.history_fun, history_error=found.history_error, **common)
 

@@ -24,11 +24,11 @@ import numpy as np
 
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.kinematics import ArmModel, paper_arm
-from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.motion.motion_profile import MotionProfile, SCALING_KEYS
 from trajplan_ros.search.baselines import de, ga, pso, spso
 from trajplan_ros.search.fuzzy import RewardPunishment
 from trajplan_ros.search.iepso import iepso
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
 from trajplan_ros.search.optimize import OptimizeResult
 
 __all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
@@ -40,8 +40,10 @@ ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
 }
 #: Largest error (m) that counts as reached unless the caller says otherwise.
 DEFAULT_TOLERANCE = 1e-6
-#: Largest angle (rad) between the tool axis and the goal ray that counts as radial.
-DEFAULT_AXIS_TOLERANCE = 1e-6
+#: Largest angle (rad) between the tool axis and its target that counts as met, by mode: the
+#: goal ray of the paper's radial mode is met exactly; an approach direction within 1 mrad,
+#: as a small arm's URDF axes, off by micro-radians, often cannot point exactly along it.
+DEFAULT_AXIS_TOLERANCE = MappingProxyType({Mode.RADIAL.value: 1e-6, Mode.APPROACH.value: 1e-3})
 #: Earlier keyword names of ``plan`` -> the request's names (the old ones keep working).
 RENAMED = MappingProxyType({'omega': 'angular_velocity', 'max_iter': 'max_iterations',
                             'tol': 'convergence_precision', 'profile': 'motion',
@@ -64,15 +66,18 @@ class PlanRequest:
     :param goal: tool position (x, y, z), m, in the arm's base frame.
     :param start: all joint angles now (rad); None: the upright pose q = 0.
     :param arm: the arm model; None: the paper's arm.
-    :param mode: "free" (position only) or "radial" (eq. 12-13: the tool axis along the goal
-        ray, pointing outward, too).
+    :param mode: "free" (position only), "radial" (eq. 12-13: the tool axis along the goal
+        ray, pointing outward, too) or "approach" (the tool axis along ``approach``).
+    :param approach: approach mode: the direction the tool axis points along (base frame; need
+        not be a unit vector); the default (0, 0, -1) is a grasp from above.
     :param motion: the motion's profile, timing and limits; the plan minimises its duration.
     :param angular_velocity: the servo angular velocity omega of eq. (10), rad/s; it caps every
         joint's velocity.
     :param world: the arm's collision model, scene and padding: the plan is the fastest direct
         motion found that keeps the padding. None: no collision check.
     :param tolerance: largest position error (m) that counts as reached.
-    :param axis_tolerance: radial mode: largest angle (rad) of the tool axis to the goal ray.
+    :param axis_tolerance: radial and approach modes: largest angle (rad) of the tool axis to
+        the goal ray or the approach direction; None: the mode's ``DEFAULT_AXIS_TOLERANCE``.
     :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
     :param population: swarm (or population) size.
     :param max_iterations: iteration cap.
@@ -82,17 +87,21 @@ class PlanRequest:
     :param shaping: the rewards-and-punishment settings (None: Table 4's).
     :param optimizer_options: further keywords of the optimiser (e.g. {"swarms": 4} for IEPSO).
     :param max_planning_time: longest search (s, monotonic clock); None: no limit.
+    :param start_limit_margin: how far (rad) a start joint may lie outside its limits (a
+        calibrated arm reads a little past them): it is planned from where it is, the motion
+        bringing it inside, with a note in the message; further out, the request is REJECTED.
     """
 
     goal: Sequence[float]
     start: Sequence[float] | None = None
     arm: ArmModel | None = None
     mode: Mode | str = Mode.FREE
+    approach: Sequence[float] = TOP_DOWN
     motion: MotionProfile = field(default_factory=MotionProfile)
     angular_velocity: float = DEFAULT_OMEGA
     world: CollisionWorld | None = None
     tolerance: float = DEFAULT_TOLERANCE
-    axis_tolerance: float = DEFAULT_AXIS_TOLERANCE
+    axis_tolerance: float | None = None
     algorithm: str = 'iepso'
     population: int = 40
     max_iterations: int = 1000
@@ -101,6 +110,7 @@ class PlanRequest:
     shaping: RewardPunishment | None = None
     optimizer_options: Mapping[str, Any] = field(default_factory=dict)
     max_planning_time: float | None = None
+    start_limit_margin: float = 0.05
 
     def __post_init__(self) -> None:
         """Hold the goal as floats (ValueError if it is not numbers) and the mode as a Mode."""
@@ -111,11 +121,16 @@ class PlanRequest:
             raise ValueError(f"mode must be one of {', '.join(m.value for m in Mode)}, "
                              f'got {self.mode!r}')
         object.__setattr__(self, 'mode', Mode(self.mode))
+        object.__setattr__(self, 'approach', tuple(float(v) for v in np.ravel(self.approach)))
 
     @classmethod
     def from_keywords(cls, goal: Sequence[float], start: Sequence[float] | None = None,
                       **settings: Any) -> PlanRequest:
-        """Return the request of ``plan``'s keywords; the names of ``RENAMED`` are taken too."""
+        """
+        Return the request of ``plan``'s keywords; the names of ``RENAMED`` are taken too.
+
+        ``velocity_scaling`` and ``acceleration_scaling`` set the motion's (``MotionProfile``).
+        """
         for old, new in RENAMED.items():
             if old in settings:
                 if new in settings:
@@ -123,6 +138,9 @@ class PlanRequest:
                 settings[new] = settings.pop(old)
         if settings.get('motion') is None:
             settings.pop('motion', None)
+        scaling = {k: settings.pop(k) for k in SCALING_KEYS if k in settings}
+        if scaling:              # the motion's own settings, given beside it
+            settings['motion'] = replace(settings.get('motion', MotionProfile()), **scaling)
         if settings.get('optimizer_options') is None:
             settings.pop('optimizer_options', None)
         known = {f.name for f in fields(cls)}
@@ -137,6 +155,13 @@ class PlanRequest:
         """Return the arm planned for: ``arm``, or the paper's when it is None."""
         return self.arm if self.arm is not None else _paper_arm()
 
+    @property
+    def axis_limit(self) -> float:
+        """Return the axis tolerance in force: ``axis_tolerance``, or the mode's default."""
+        if self.axis_tolerance is not None:
+            return self.axis_tolerance
+        return DEFAULT_AXIS_TOLERANCE.get(self.mode.value, DEFAULT_AXIS_TOLERANCE['radial'])
+
     def replace(self, **changes: Any) -> PlanRequest:
         """Return a copy with ``changes`` (as ``dataclasses.replace``)."""
         return replace(self, **changes)
@@ -147,9 +172,13 @@ class PlanRequest:
             raise ValueError(f'unknown algorithm {self.algorithm!r}; choose from '
                              f"{', '.join(ALGORITHMS)}")
         positive = {'angular_velocity': self.angular_velocity, 'tolerance': self.tolerance,
-                    'axis_tolerance': self.axis_tolerance}
+                    'axis_tolerance': self.axis_limit}
         if self.max_planning_time is not None:
             positive['max_planning_time'] = self.max_planning_time
+        if not (isinstance(self.start_limit_margin, (int, float))
+                and 0.0 <= self.start_limit_margin < np.inf):
+            raise ValueError('start_limit_margin must be finite and not negative, '
+                             f'got {self.start_limit_margin!r}')
         for name, value in positive.items():
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
                 raise ValueError(f'{name} must be finite and positive, got {value!r}')
@@ -168,6 +197,9 @@ class PlanRequest:
             raise ValueError(f'seed must be None, an integer >= 0 or a numpy Generator, '
                              f'got {self.seed!r}')
         self._check_options()
+        d = np.asarray(self.approach)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+            raise ValueError(f'approach must be 3 finite numbers, not all zero, got {list(d)}')
         arm = self.planned_arm
         if self.world is not None and self.world.arm.geometry.arm.joint_names != arm.joint_names:
             raise ValueError(f'the collision model is of joints '

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from nav_msgs.msg import Path
+import numpy as np
 from std_msgs.msg import Header
 from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.planning.planner import describe_goal
@@ -57,14 +58,49 @@ def _refusal(where: str, result: PlanResult, took: str) -> str:
     return f'{where}: {result.status.value}: {result.message}{optimised}'
 
 
+def approach_axis(orientation: tuple[float, float, float, float]) -> np.ndarray:
+    """Return the z axis of a quaternion (x, y, z, w): a pose goal's approach direction."""
+    x, y, z, w = np.asarray(orientation, dtype=float) / np.linalg.norm(orientation)
+    return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+
+
+def in_base(job: Job, settings: Settings,
+            start: PlanStart) -> tuple[np.ndarray, np.ndarray | None]:
+    """
+    Return the job's goal in the base frame, and its approach direction there (or None).
+
+    The direction is a pose goal's z axis when ``goal_orientation`` is approach. The robot's
+    own forward kinematics at ``start`` poses the goal's frame.
+    """
+    s = settings
+    direction = None
+    if s.goal_orientation == 'approach' and job.orientation is not None:
+        direction = approach_axis(job.orientation)
+    if job.frame in ('', s.base_frame):
+        return np.asarray(job.goal, dtype=float), direction
+    pose = s.frames.to_base(job.frame, dict(zip(s.arm.joint_names, start.q)))
+    goal = pose[:3, :3] @ np.asarray(job.goal, dtype=float) + pose[:3, 3]
+    return goal, None if direction is None else pose[:3, :3] @ direction
+
+
 def run(job: Job, settings: Settings, start: PlanStart, header: Header,
         stop: Callable[[], bool]) -> Outcome:
-    """Plan ``job`` from ``start``; on success build its trajectory and tool path messages."""
+    """
+    Plan ``job`` from ``start``; on success build its trajectory and tool path messages.
+
+    A goal in another frame is brought into the base frame first (``job.goal`` then holds it).
+    """
     s = settings
-    where = (f'{job.label} {describe_goal(job.goal)} m from q = {describe_goal(start.q)} rad'
-             f'{start.describe()}')
+    goal, direction = in_base(job, s, start)
+    moved = f" (in '{job.frame}': {describe_goal(job.goal)} m)" if job.frame not in (
+        '', s.base_frame) else ''
+    job.goal = tuple(goal.tolist())
+    where = (f'{job.label} {describe_goal(job.goal)} m{moved} from q = '
+             f'{describe_goal(start.q)} rad{start.describe()}')
     request = s.request.replace(goal=job.goal, start=start.q,
                                 tolerance=job.tolerance or s.request.tolerance)
+    if direction is not None:
+        request = request.replace(approach=direction)
     result = plan(request, stop=stop)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
@@ -82,7 +118,8 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                        plan_time_s=timed)
     traj = result.trajectory(sample_period=s.sample_period)
     path = path_msg(s.arm, traj, header) if job.is_call else None
-    return Outcome(True, f'{where}: {result.message}; {took}; published {len(traj.times)} '
+    sent = 'answered, not sent (compute_plan)' if job.plan_only else 'published'
+    return Outcome(True, f'{where}: {result.message}; {took}; {sent} {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,
                    plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance)

@@ -39,6 +39,9 @@ class Job:
     tolerance: float | None = None
     future: Any = None
     stamp: tuple[int, int] | None = None     # a call's goal.header.stamp (sec, nanosec)
+    frame: str = ''                          # the goal's frame_id ('': the base frame)
+    orientation: tuple[float, float, float, float] | None = None   # a pose goal's (x, y, z, w)
+    plan_only: bool = False                  # answered, never sent to the controller
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan

@@ -8,16 +8,22 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
 * ``goal`` (geometry_msgs/msg/Point, m, arm base frame): plan each goal and, on success,
   publish the trajectory. While the node is busy only the newest goal waits; an older waiting
   goal is logged as superseded.
-* ``plan_trajectory`` (nav_msgs/srv/GetPlan): plan ``request.goal.pose.position``. The
-  response's plan is the tool path of the trajectory, one pose per point (empty on failure).
+* ``goal_pose`` (geometry_msgs/msg/PoseStamped; RViz's Goal Pose tool): a goal like ``goal``;
+  with ``goal_orientation: approach`` the tool axis points along its orientation's z axis.
+* ``plan_trajectory`` (nav_msgs/srv/GetPlan): plan ``request.goal.pose`` (its orientation as
+  for ``goal_pose``). The response's plan is the tool path of the trajectory, one pose per
+  point (empty on failure).
+* ``compute_plan`` (nav_msgs/srv/GetPlan): answered as ``plan_trajectory``, never published.
+* Frames: a stamped goal (``goal_pose``, ``clicked_point``, the services) in any link frame
+  of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
+  its current joint angles (``kinematics.frames``); any other frame is refused, naming the
+  frames it knows.
 * ``joint_trajectory`` (out), ``planned_path`` (nav_msgs/msg/Path, out, for RViz),
   ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
 * ``plan_results`` (diagnostic_msgs/msg/DiagnosticStatus, out): how each goal and call ended
   and why, with what the caller sent (``ros.outcomes``).
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
-* ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal,
-  refused with its reason (logged and on ``plan_results``) unless its frame is ``base_frame``
-  (or empty).
+* ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal.
 * ``robot_description`` (std_msgs/msg/String, in; reliable, transient local, depth 1, as
   robot_state_publisher offers it): a URDF; unless the ``robot_description`` parameter is set,
   the arm is built from it for the next plan. A refused description is logged and the arm in
@@ -61,7 +67,7 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Point, PointStamped
+from geometry_msgs.msg import Point, PointStamped, Pose, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
@@ -127,17 +133,33 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
     return descriptor
 
 
-def request_problem(request: GetPlan.Request, base_frame: str) -> str | None:
+def request_problem(request: GetPlan.Request, settings: Settings) -> str | None:
     """Return why a GetPlan request is refused before planning, or None."""
     tolerance = request.tolerance
     if not math.isfinite(tolerance) or tolerance < 0:
         return (f'tolerance {tolerance} m is not allowed: give 0 (use the tolerance parameter) '
                 'or a positive finite value')
-    frame = request.goal.header.frame_id
-    if frame and frame != base_frame:
-        return (f"the goal is in frame '{frame}', but this node plans in base_frame "
-                f"'{base_frame}' (it does no frame transforms)")
+    return goal_problem(request.goal.header.frame_id, _quaternion(request.goal.pose), settings)
+
+
+def goal_problem(frame: str, orientation: tuple[float, ...] | None,
+                 settings: Settings) -> str | None:
+    """Return why a goal in ``frame`` (a pose's ``orientation``) cannot be planned, or None."""
+    if frame and frame != settings.base_frame:
+        try:
+            settings.frames.check(frame)
+        except ValueError as exc:
+            return str(exc)
+    if (settings.goal_orientation == 'approach' and orientation is not None
+            and not (all(map(math.isfinite, orientation)) and any(orientation))):
+        return f'the goal orientation {list(orientation)} is not a rotation (x, y, z, w)'
     return None
+
+
+def _quaternion(pose: Pose) -> tuple[float, float, float, float]:
+    """Return a pose's orientation as (x, y, z, w)."""
+    o = pose.orientation
+    return (o.x, o.y, o.z, o.w)
 
 
 class PlannerNode(Node):
@@ -151,6 +173,7 @@ class PlannerNode(Node):
         self._topic_semantic = ''                     # the last robot_description_semantic
         self._live = LiveScene()                      # obstacles from collision_objects
         self._settings = Settings.from_parameters(self._parameter_values())
+        self._warn_ignored_joints(self._settings)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -174,6 +197,7 @@ class PlannerNode(Node):
         self._results = self.create_publisher(DiagnosticStatus, outcomes.TOPIC, outcomes.QOS)
         self.create_subscription(Point, 'goal', self._on_goal, KEEP_ALL)
         self.create_subscription(PointStamped, 'clicked_point', self._on_clicked_point, KEEP_ALL)
+        self.create_subscription(PoseStamped, 'goal_pose', self._on_goal_pose, KEEP_ALL)
         self.create_subscription(JointState, 'joint_states', self._on_joint_states,
                                  qos_profile_sensor_data)
         self.create_subscription(String, 'robot_description', self._on_description, LATCHED)
@@ -183,8 +207,11 @@ class PlannerNode(Node):
         self.create_subscription(MarkerArray, 'collision_objects', self._on_collision_objects,
                                  KEEP_ALL)
         self._publish_markers(self._settings)
+        calls = ReentrantCallbackGroup()
         self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
-                            callback_group=ReentrantCallbackGroup())
+                            callback_group=calls)
+        self.create_service(GetPlan, 'compute_plan', self._on_compute_plan,
+                            qos_profile=KEEP_ALL, callback_group=calls)
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
@@ -242,9 +269,20 @@ class PlannerNode(Node):
                 f'{settings.arm.n_joints}-joint chain: the start is all zeros until it is set '
                 '(or joint_states arrive)')
 
+    def _warn_ignored_joints(self, settings: Settings) -> None:
+        """Warn once per settings of the joint limits' joints that the chain does not plan."""
+        ignored = settings.request.motion.ignored_joints(settings.arm)
+        if ignored:
+            self.get_logger().warning(
+                f"joint_limits_file: joints {', '.join(ignored)} are not in the planned chain "
+                f"({', '.join(settings.arm.joint_names)}): ignored")
+
     def _use(self, settings: Settings) -> None:
         """Plan with ``settings`` from the next job; forget the old arm's states if it changed."""
         before = self._settings
+        if (settings.request.motion, settings.arm.joint_names) != (
+                before.request.motion, before.arm.joint_names):
+            self._warn_ignored_joints(settings)
         settings = self._with_live_scene(settings)
         if settings.world is not before.world:
             self._publish_markers(settings)
@@ -305,8 +343,16 @@ class PlannerNode(Node):
     # --- inputs (executor thread) -----------------------------------------------------------
 
     def _on_goal(self, msg: Point) -> None:
+        self._take_goal(Job(f'goal #{next(self._goal_ids)}', (msg.x, msg.y, msg.z)))
+
+    def _take_goal(self, job: Job) -> None:
+        """Queue a topic goal (the newest waits), or refuse it when its frame is unknown."""
         self._counters.add('goals_received')
-        job = Job(f'goal #{next(self._goal_ids)}', (msg.x, msg.y, msg.z))
+        problem = goal_problem(job.frame, job.orientation, self._settings)
+        if problem:
+            self._counters.add('goals_failed')
+            self._refused(job, problem)
+            return
         self._log.debug(f'queued {job.label} {describe_goal(job.goal)} m')
         superseded = self._mailbox.put_goal(job)
         if superseded is job:
@@ -320,31 +366,39 @@ class PlannerNode(Node):
             self._publish_outcome(superseded, 'superseded', reason)
 
     def _on_clicked_point(self, msg: PointStamped) -> None:
-        frame, base_frame = msg.header.frame_id, self._settings.base_frame
-        if frame and frame != base_frame:
-            self._counters.add('goals_received')
-            self._counters.add('goals_failed')
-            job = Job(f'clicked_point #{next(self._goal_ids)}',
-                      (msg.point.x, msg.point.y, msg.point.z))
-            self._refused(job, f"it is in frame '{frame}', but this node plans in base_frame "
-                               f"'{base_frame}' (it does no frame transforms)")
-            return
-        self._on_goal(msg.point)
+        p = msg.point
+        self._take_goal(Job(f'clicked_point #{next(self._goal_ids)}', (p.x, p.y, p.z),
+                            frame=msg.header.frame_id))
+
+    def _on_goal_pose(self, msg: PoseStamped) -> None:
+        p = msg.pose.position
+        self._take_goal(Job(f'goal_pose #{next(self._goal_ids)}', (p.x, p.y, p.z),
+                            frame=msg.header.frame_id, orientation=_quaternion(msg.pose)))
 
     def _on_joint_states(self, msg: JointState) -> None:
         self._states.update(msg.name, msg.position, self._settings.arm.joint_names)
 
     async def _on_plan_call(self, request: GetPlan.Request,
                             response: GetPlan.Response) -> GetPlan.Response:
+        return await self._serve(request, response, plan_only=False)
+
+    async def _on_compute_plan(self, request: GetPlan.Request,
+                               response: GetPlan.Response) -> GetPlan.Response:
+        return await self._serve(request, response, plan_only=True)
+
+    async def _serve(self, request: GetPlan.Request, response: GetPlan.Response,
+                     plan_only: bool) -> GetPlan.Response:
+        """Answer a call of plan_trajectory, or of compute_plan (``plan_only``: never sent)."""
         self._counters.add('calls_received')
         s = self._settings
         p = request.goal.pose.position
         stamp = request.goal.header.stamp
-        job = Job(f'service call #{next(self._call_ids)}', (p.x, p.y, p.z),
-                  tolerance=request.tolerance or None, future=Future(),
-                  stamp=(stamp.sec, stamp.nanosec))
+        job = Job(f"{'compute_plan' if plan_only else 'service'} call #{next(self._call_ids)}",
+                  (p.x, p.y, p.z), tolerance=request.tolerance or None, future=Future(),
+                  stamp=(stamp.sec, stamp.nanosec), frame=request.goal.header.frame_id,
+                  orientation=_quaternion(request.goal.pose), plan_only=plan_only)
         response.plan = Path(header=self._header(s.base_frame))
-        problem = request_problem(request, s.base_frame)
+        problem = request_problem(request, s)
         admission = None if problem else self._mailbox.put_call(job, s.max_queued_calls)
         if problem:
             self._refused(job, problem)
@@ -444,7 +498,7 @@ class PlannerNode(Node):
                 return
             if not job.is_call:
                 self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
-            if outcome.succeeded:
+            if outcome.succeeded and not job.plan_only:
                 traj = outcome.trajectory
                 self._trajectories.publish(trajectory_msg(traj))
                 if self._paths.get_subscription_count():     # a long path costs time to convert

@@ -30,12 +30,12 @@ from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAU
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics.frames import RobotFrames
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.motion.motion_profile import (JointLimits, MotionProfile, Profile,
-                                                read_joint_limits, Timing)
+from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode,
                                    PlanRequest)
-from trajplan_ros.search.objective import DEFAULT_OMEGA
+from trajplan_ros.search.objective import DEFAULT_OMEGA, TOP_DOWN
 
 
 __all__ = ['PARAMETERS', 'ParameterSpec', 'Settings', 'default_values']
@@ -91,7 +91,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   'joints ends'),
     ParameterSpec('tool_offset', [0.0, 0.0, 0.0], 'tool point in the tip link frame, m'),
     ParameterSpec('tool_axis', [0.0, 0.0, 1.0],
-                  'tool axis in the tip link frame (radial mode uses it)'),
+                  'tool axis in the tip link frame (radial and approach modes use it)'),
     *_arm_specs(),
     ParameterSpec('angular_velocity', DEFAULT_OMEGA,
                   "servo angular velocity omega, rad/s; it caps every joint's velocity limit",
@@ -105,7 +105,15 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   choices=tuple(t.value for t in Timing)),
     ParameterSpec('joint_limits_file', '',
                   "MoveIt's joint_limits.yaml (per-joint max_velocity, max_acceleration, "
-                  'max_jerk); empty: none'),
+                  'max_jerk, default scaling factors; joints not planned, such as a gripper, '
+                  'are ignored with a warning); empty: none'),
+    ParameterSpec('velocity_scaling', 0.0,
+                  'velocity limits times this, in (0, 1], as MoveIt scales them; 0: '
+                  "joint_limits_file's default_velocity_scaling_factor, else 1",
+                  bounds=(0.0, 1.0)),
+    ParameterSpec('acceleration_scaling', 0.0,
+                  "acceleration limits times this, in (0, 1]; 0: joint_limits_file's "
+                  'default_acceleration_scaling_factor, else 1', bounds=(0.0, 1.0)),
     ParameterSpec('max_acceleration', 0.0,
                   'acceleration limit of every joint joint_limits_file gives none, rad/s^2; '
                   '0: none', bounds=(0.0, 1e6)),
@@ -126,8 +134,16 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   'least clearance a motion keeps from obstacles and between links, m',
                   bounds=(0.0, 1.0)),
     ParameterSpec('mode', Mode.FREE.value,
-                  'free: position only; radial: the tool axis along the goal ray too (eq. 12-13)',
+                  'free: position only; radial: the tool axis along the goal ray too '
+                  '(eq. 12-13); approach: along approach_direction',
                   choices=tuple(m.value for m in Mode)),
+    ParameterSpec('approach_direction', list(TOP_DOWN),
+                  'approach mode: the direction of the tool axis in base_frame for Point goals '
+                  '(0, 0, -1: from above)'),
+    ParameterSpec('goal_orientation', 'ignore',
+                  "how a pose goal's orientation is used (goal_pose, plan_trajectory, "
+                  'compute_plan): ignore, or approach (the tool axis along its z axis; Point '
+                  'goals then take approach_direction)', choices=('ignore', 'approach')),
     ParameterSpec('algorithm', 'iepso', 'optimiser', choices=tuple(ALGORITHMS)),
     ParameterSpec('population', 40, 'particles per swarm', bounds=(2, 10000)),
     ParameterSpec('max_iterations', 1000, 'iteration cap', bounds=(1, 1000000)),
@@ -135,9 +151,15 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('tolerance', DEFAULT_TOLERANCE,
                   'largest position error that counts as reached, m '
                   '(a GetPlan tolerance > 0 wins)', bounds=(1e-12, 1.0)),
-    ParameterSpec('axis_tolerance', DEFAULT_AXIS_TOLERANCE,
-                  'radial mode: largest angle between the tool axis and the goal ray that '
-                  'counts as radial, rad', bounds=(1e-12, 3.2)),
+    ParameterSpec('axis_tolerance', 0.0,
+                  'largest angle between the tool axis and the goal ray (radial) or the '
+                  'approach direction that counts as met, rad; 0: '
+                  + ', '.join(f'{v:g} in {k} mode' for k, v in DEFAULT_AXIS_TOLERANCE.items()),
+                  bounds=(0.0, 3.2)),
+    ParameterSpec('start_limit_margin', 0.05,
+                  'a start joint this far outside its limits (rad) is planned from, the motion '
+                  'bringing it inside, with a warning; further out the goal is refused',
+                  bounds=(0.0, 3.2)),
     ParameterSpec('base_frame', 'base_link', 'frame_id of the returned tool path'),
     ParameterSpec('sample_period', 0.1, 'time between trajectory points, s',
                   bounds=(1e-3, 10.0)),
@@ -176,6 +198,8 @@ class Settings:
     description: str = ''
     #: start_positions did not fit the described chain and all zeros stand in for it.
     start_ignored: bool = False
+    #: How a pose goal's orientation is used: 'ignore' or 'approach' (its z axis).
+    goal_orientation: str = 'ignore'
 
     @property
     def arm(self) -> ArmModel:
@@ -186,6 +210,12 @@ class Settings:
     def world(self) -> CollisionWorld | None:
         """Return the collision model, the scene_file's obstacles and the padding (or None)."""
         return self.request.world
+
+    @property
+    def frames(self) -> RobotFrames:
+        """Return the robot's link frames: a goal may be in any of them (or in base_frame)."""
+        urdf = self.description or urdf_xml(self.arm, velocity=DEFAULT_OMEGA)
+        return _frames(urdf.encode(), self.arm.base_link)
 
     def planning_with(self, **changes: Any) -> Settings:
         """Return these settings with ``changes`` to the plan's (``PlanRequest``'s fields)."""
@@ -241,22 +271,29 @@ class Settings:
                    start_ignored=ignored, sample_period=values['sample_period'], start=start,
                    max_trajectory_points=values['max_trajectory_points'],
                    max_queued_calls=values['max_queued_calls'],
+                   goal_orientation=values['goal_orientation'],
                    diagnostic_period=values['diagnostic_updater.period'])
 
 
 def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
     """Return the plan settings of the parameters, checked: all but the world, goal and start."""
-    limits = _joint_limits(values['joint_limits_file']) if values['joint_limits_file'] else {}
-    motion = MotionProfile(profile=values['profile'], timing=values['timing'],
-                           max_acceleration=values['max_acceleration'] or None,
-                           max_jerk=values['max_jerk'] or None, joint_limits=limits)
+    base = (_limits_file(values['joint_limits_file']) if values['joint_limits_file']
+            else MotionProfile())
+    motion = replace(base, profile=values['profile'], timing=values['timing'],
+                     max_acceleration=values['max_acceleration'] or None,
+                     max_jerk=values['max_jerk'] or None,
+                     velocity_scaling=values['velocity_scaling'] or base.velocity_scaling,
+                     acceleration_scaling=(values['acceleration_scaling']
+                                           or base.acceleration_scaling))
+    mode = Mode.APPROACH.value if values['goal_orientation'] == 'approach' else values['mode']
     request = PlanRequest(
-        (), arm=arm, mode=values['mode'], motion=motion,
+        (), arm=arm, mode=mode, approach=values['approach_direction'], motion=motion,
         angular_velocity=values['angular_velocity'], tolerance=values['tolerance'],
-        axis_tolerance=values['axis_tolerance'], algorithm=values['algorithm'],
+        axis_tolerance=values['axis_tolerance'] or None, algorithm=values['algorithm'],
         population=values['population'], max_iterations=values['max_iterations'],
         seed=None if values['seed'] < 0 else values['seed'],
-        max_planning_time=values['max_planning_time'])
+        max_planning_time=values['max_planning_time'],
+        start_limit_margin=values['start_limit_margin'])
     request.validate()
     return request
 
@@ -299,17 +336,24 @@ def _collision_model(urdf: bytes, base_link: str, tip_link: str, srdf: str) -> A
 
 
 @functools.lru_cache(maxsize=4)
+def _frames(urdf: bytes, base_link: str) -> RobotFrames:
+    """Return a URDF's link frames, read once per URDF and base."""
+    return RobotFrames(urdf, base_link)
+
+
+@functools.lru_cache(maxsize=4)
 def _scene(path: str) -> Scene:
     """Return a scene file's obstacles, read once per path (as ``_joint_limits``)."""
     return Scene.from_file(path)
 
 
 @functools.lru_cache(maxsize=4)
-def _joint_limits(path: str) -> dict[str, JointLimits]:
+def _limits_file(path: str) -> MotionProfile:
     """
-    Return a joint_limits.yaml's limits, read once per path (ValueError, not cached, if bad).
+    Return a joint_limits.yaml's limits and default scalings, read once per path.
 
-    So a parameter change that leaves ``joint_limits_file`` as it is does not read the file
-    again; to read an edited file, set the parameter to another path (or empty) and back.
+    (ValueError, not cached, if bad.) So a parameter change that leaves ``joint_limits_file``
+    as it is does not read the file again; to read an edited file, set the parameter to
+    another path (or empty) and back.
     """
-    return read_joint_limits(path)
+    return MotionProfile.from_file(path)

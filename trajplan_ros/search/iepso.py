@@ -460,7 +460,7 @@ def _by_multistart(obj: Objective) -> bool:
     which the curve search follows. Measurements: doc/benchmarks.md, "How the search's
     settings were chosen".
     """
-    if obj.radial:
+    if obj.holds_axis:
         return obj.arm.planned >= 6
     return obj.arm.planned != 4
 
@@ -598,7 +598,7 @@ def _settings(obj: Objective, population: int, max_iter: int, polish_period: int
 
     By mode (``FREE_DEFAULTS``, ``RADIAL_DEFAULTS``), and ``agreement`` 2.
     """
-    defaults = RADIAL_DEFAULTS if obj.radial else FREE_DEFAULTS
+    defaults = RADIAL_DEFAULTS if obj.holds_axis else FREE_DEFAULTS
     swarms = defaults['swarms'] if swarms is None else swarms
     polish_count = defaults['polish_count'] if polish_count is None else polish_count
     polish_steps = defaults['polish_steps'] if polish_steps is None else polish_steps

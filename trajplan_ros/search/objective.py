@@ -15,14 +15,18 @@ Mode "free" constrains only the tool position. Mode "radial" adds the orientatio
 eq. (12)-(13): the tool sweeps from upright by eps = arccos(z . p / |z||p|) towards the goal, so
 its axis ends along the goal ray, pointing outward: u_tool = p / |p| (doc/paper.md). On the
 paper's arm that is theta2 + theta3 + theta4 = +eps (DH) with the base facing the goal and -eps
-with it turned away; written through the tool axis it holds for any chain. The axis error is the
-angle between u_tool and p / |p| (``axis_angle``; a tool pointing inward is an error of pi). In
-radial mode the error fed to S combines both, err = sqrt(|p - goal|^2 + (L angle)^2), with L
-the arm's reach turning radians into metres.
+with it turned away; written through the tool axis it holds for any chain. Mode "approach" (not
+in the paper) holds the tool axis along a fixed direction d of the base frame instead of the
+goal ray, e.g. d = (0, 0, -1) for a grasp from above; the rotation about the axis stays free.
+Both modes hold one target direction, the axis target (``axis_target``): every formula below
+is the same for either. The axis error is the angle between u_tool and the target (``axis_angle``;
+a tool pointing the other way is an error of pi). With the axis held, the error fed to S
+combines both, err = sqrt(|p - goal|^2 + (L angle)^2), with L the arm's reach turning radians
+into metres.
 
 The local polish needs the constraints as smooth residuals: the position residual p - goal and,
-in radial mode, the two components of u_tool across the goal ray (``residuals``), which vanish at
-u_tool = +-p / |p|; the angle tells the two apart.
+with the axis held, the two components of u_tool across the target (``residuals``), which vanish
+at u_tool = +-target; the angle tells the two apart.
 """
 from __future__ import annotations
 
@@ -39,8 +43,8 @@ from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
 
-__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'errors_eq11',
-           'goal_ray_basis']
+__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'TOP_DOWN',
+           'direction_basis', 'errors_eq11']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -54,6 +58,11 @@ class Mode(str, Enum):
 
     FREE = 'free'
     RADIAL = 'radial'
+    APPROACH = 'approach'
+
+
+#: The approach direction of a grasp from above (base frame).
+TOP_DOWN = (0.0, 0.0, -1.0)
 
 
 class InvalidRequest(ValueError):
@@ -69,14 +78,19 @@ class Evaluation:
     error: np.ndarray           # constraint error fed to S (eq. 11), m
 
 
-def goal_ray_basis(goal: np.ndarray) -> np.ndarray:
+def direction_basis(direction: np.ndarray, hint: np.ndarray | None = None) -> np.ndarray:
     """
-    Return the goal ray p / |p| and two unit vectors across it, as the rows of a 3x3 matrix.
+    Return the unit direction d / |d| and two unit vectors across it, as the rows of a 3x3 matrix.
 
-    The first vector across is horizontal (z x p normalised; x on the z axis).
+    The first vector across is ``hint`` made perpendicular to d, or, without a usable hint, the
+    horizontal z x d (x when d is vertical); the second is d times the first.
     """
-    x, y, z = goal / np.sqrt(goal @ goal)
-    size = np.hypot(x, y)                                 # of z x ray = (-y, x, 0)
+    x, y, z = d = direction / np.sqrt(direction @ direction)
+    side = None if hint is None else hint - (hint @ d) * d
+    if side is not None and np.sqrt(side @ side) > 1e-9 * np.sqrt(hint @ hint):
+        a, b, c = side / np.sqrt(side @ side)
+        return np.array([[x, y, z], [a, b, c], [y * c - z * b, z * a - x * c, x * b - y * a]])
+    size = np.hypot(x, y)                                 # of z x d = (-y, x, 0)
     a, b = (-y / size, x / size) if size > 1e-12 else (1.0, 0.0)
     return np.array([[x, y, z], [a, b, 0.0], [-z * b, z * a, x * b - y * a]])
 
@@ -87,7 +101,7 @@ class Problem(NamedTuple):
     chain: Chain            # the planned joints' chain, the held ones at their start
     goal: np.ndarray        # (3,) m
     across: np.ndarray      # (h, 3) the tool axis's components held at zero (``across_basis``)
-    ray: np.ndarray         # (3, 3) the goal ray and two vectors across it (``ray_basis``)
+    ray: np.ndarray         # (3, 3) the axis target and two vectors across it (``ray_basis``)
     reach: float            # m, L of the error (``errors_eq11``)
     start: np.ndarray       # (m,) the planned joints' start angles
     law: TimeLaw            # each joint's time law: R = max_i t_i(|x_i - start_i|) (eq. 10)
@@ -102,7 +116,8 @@ def errors_eq11(p: np.ndarray, u: np.ndarray, goal: np.ndarray, ray: np.ndarray,
     """
     Return the error of eq. (11) at tool points p and axes u (N, 3), plus the axis's.
 
-    ``ray``: the goal ray and two unit vectors across it (rows); ``held``: how many of those
+    ``ray``: the axis target (the goal ray in radial mode) and two unit vectors across it
+    (rows); ``held``: how many of those
     the constraints hold (``Objective.across_basis``). With both, the error adds (L angle)^2,
     the angle between u and the ray; with one, (L asin |u . across|)^2, u's angle from the
     plane that leaves it; L = ``reach``.
@@ -127,8 +142,10 @@ class Objective:
     """
     F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary).
 
-    ``across`` (radial mode): how many components of the tool axis across the goal ray the
-    constraints hold at zero; 2, the axis on the ray, but for ``solution_curve``'s curves.
+    ``across`` (radial and approach modes): how many components of the tool axis across the
+    axis target the constraints hold at zero; 2, the axis on it, but for ``solution_curve``'s
+    curves. ``approach``: the approach mode's direction d (base frame; default ``TOP_DOWN``).
+    ``start_margin``: how far (rad) a start joint may lie outside its limits (``start_notes``).
     ``profile``: the motion's profile and limits (default the paper's servo law); a profile
     that needs a limit no source gives raises ValueError.
     """
@@ -136,9 +153,12 @@ class Objective:
     def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
                  mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
                  shaping: RewardPunishment | None = None, across: int = 2,
-                 profile: MotionProfile | None = None) -> None:
+                 profile: MotionProfile | None = None,
+                 approach: np.ndarray | tuple[float, ...] = TOP_DOWN,
+                 start_margin: float = 0.0) -> None:
         self.arm = arm
         self.mode = Mode(mode)
+        self.approach = self._check_direction(approach)
         if type(across) is not int or not 0 <= across <= 2:
             raise ValueError(f'across must be 0, 1 or 2, got {across!r}')
         if not (np.isfinite(omega) and omega > 0):
@@ -147,15 +167,14 @@ class Objective:
         self.profile = profile if profile is not None else MotionProfile()
         law = self.profile.time_law(arm, self.omega)
         self.shaping = shaping if shaping is not None else RewardPunishment()
-        self.goal = self._check_goal(arm, goal)
-        if self.radial and not np.any(self.goal):
-            raise InvalidRequest('radial mode needs a goal away from the base origin: the goal '
-                                 'ray of eq. (12)-(13) has no direction at the origin')
-        self.start = self._check_start(arm, start)
-        #: The arm as planned: trailing joints that cannot move the tool point (nor, in radial
-        #: mode, the tool axis), such as a wrist roll about the tool axis, keep their start
+        self.goal = self._check_goal(arm, goal, self.mode)
+        self.start_margin = float(start_margin)
+        #: The full start, and one line per joint outside its limits within ``start_margin``.
+        self.start, self.start_notes = self._check_start(arm, start, self.start_margin)
+        #: The arm as planned: trailing joints that cannot move the tool point (nor, with the
+        #: axis held, the tool axis), such as a wrist roll about the tool axis, keep their start
         #: angle, as moving them could only add time.
-        self.arm = arm = arm.without_idle_tail(self.radial)
+        self.arm = arm = arm.without_idle_tail(self.holds_axis)
         m = arm.planned
         #: The planned joints' start angles.
         self.planned_start = self.start[:m]
@@ -172,12 +191,13 @@ class Objective:
         self.err_max = self.shaping.err_max or 2.0 * arm.reach
         #: R of the longest motion the limits allow (s), for the fuzzy rules (Table 1).
         self.longest_time = float(motion_times(self.law, self.upper[None, :], self.lower)[0])
-        #: Rows: the goal ray, then two unit vectors across it (radial mode only).
-        self.ray_basis = goal_ray_basis(self.goal) if self.radial else np.eye(3)
-        #: Rows: the components of the tool axis across the goal ray that the residuals hold at
-        #: zero (radial mode: both, unless ``across`` is less, none in free mode). With fewer
-        #: than both, the solutions are the larger sets that ``solution_curve`` follows.
-        self.across_basis = self.ray_basis[1: 1 + across] if self.radial else np.empty((0, 3))
+        #: Rows: the axis target, then two unit vectors across it (``_target_basis``).
+        self.ray_basis = self._target_basis()
+        #: Rows: the components of the tool axis across the target that the residuals hold at
+        #: zero (with the axis held: both, unless ``across`` is less; none in free mode). With
+        #: fewer than both, the solutions are the larger sets that ``solution_curve`` follows.
+        self.across_basis = (self.ray_basis[1: 1 + across] if self.holds_axis
+                             else np.empty((0, 3)))
         self._tail = arm.held_tail(self.start)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
@@ -201,7 +221,9 @@ class Objective:
         if across not in self._holding:
             self._holding[across] = Objective(self.arm, self.goal, self.start, mode=self.mode,
                                               omega=self.omega, shaping=self.shaping,
-                                              across=across, profile=self.profile)
+                                              across=across, profile=self.profile,
+                                              approach=self.approach,
+                                              start_margin=self.start_margin)
         return self._holding[across]
 
     @property
@@ -210,9 +232,41 @@ class Objective:
         return max(self.arm.planned - 3 - len(self.across_basis), 0)
 
     @property
-    def radial(self) -> bool:
-        """Return True in radial mode (the eq. 12-13 orientation constraint applies)."""
-        return self.mode is Mode.RADIAL
+    def holds_axis(self) -> bool:
+        """Return True when the tool axis is held too (radial and approach modes)."""
+        return self.mode is not Mode.FREE
+
+    @property
+    def axis_target(self) -> np.ndarray:
+        """Return the direction the tool axis must point along: the goal ray, or ``approach``."""
+        return self.approach if self.mode is Mode.APPROACH else self.goal
+
+    @property
+    def target_name(self) -> str:
+        """Return the axis target in words, for messages."""
+        return 'the approach direction' if self.mode is Mode.APPROACH else 'the goal ray'
+
+    def _target_basis(self) -> np.ndarray:
+        """
+        Return the axis target and two unit vectors across it (rows; identity in free mode).
+
+        In approach mode the first across lies in the vertical plane through the goal where it
+        can: the component that the pitch joints of a pan-and-pitch arm turn.
+        """
+        if not self.holds_axis:
+            return np.eye(3)
+        hint = (None if self.mode is Mode.RADIAL else
+                np.cross(self.approach, (-self.goal[1], self.goal[0], 0.0)))
+        return direction_basis(self.axis_target, hint)
+
+    @staticmethod
+    def _check_direction(direction: np.ndarray | tuple[float, ...]) -> np.ndarray:
+        """Return an approach direction as a unit vector; InvalidRequest if it has none."""
+        d = np.array(direction, dtype=float).ravel()
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+            raise InvalidRequest(f'approach direction must be 3 finite numbers, not all zero, '
+                                 f'got {d.tolist()}')
+        return d / np.linalg.norm(d)
 
     @staticmethod
     def _search_box(lower: np.ndarray, upper: np.ndarray,
@@ -223,7 +277,7 @@ class Objective:
         return np.where(turn, window, lower), np.where(turn, window + 2.0 * np.pi, upper)
 
     @staticmethod
-    def _check_goal(arm: ArmModel, goal: np.ndarray) -> np.ndarray:
+    def _check_goal(arm: ArmModel, goal: np.ndarray, mode: Mode) -> np.ndarray:
         g = np.array(goal, dtype=float)          # a copy: writable, as the kernels are compiled
         if g.shape != (3,):
             raise InvalidRequest(
@@ -238,23 +292,37 @@ class Objective:
             raise InvalidRequest(
                 f'goal is {dist:.4f} m from {where}, '
                 f"beyond the arm's reach of {arm.reach:.4f} m (eq. 14)")
+        if mode is Mode.RADIAL and not np.any(g):
+            raise InvalidRequest('radial mode needs a goal away from the base origin: the goal '
+                                 'ray of eq. (12)-(13) has no direction at the origin')
         return g
 
     @staticmethod
-    def _check_start(arm: ArmModel, start: np.ndarray) -> np.ndarray:
+    def _check_start(arm: ArmModel, start: np.ndarray,
+                     margin: float) -> tuple[np.ndarray, list[str]]:
+        """
+        Return the full start and its notes; InvalidRequest for a bad one or one too far out.
+
+        A joint outside its limits by at most ``margin`` (rad; a calibrated arm's reading) is
+        kept where it is, with a note: the motion to the goal, which lies within the limits,
+        brings it inside.
+        """
         try:
             q = arm.full_start(start)
         except ValueError as exc:
             raise InvalidRequest(str(exc)) from None
         if not np.all(np.isfinite(q)):
             raise InvalidRequest(f'start has a non-finite joint angle: {q.tolist()}')
-        out = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))
-        if out.size:
-            i = int(out[0])
-            raise InvalidRequest(
-                f'start joint {arm.joint_names[i]} = {q[i]:.6g} rad is outside its limits '
-                f'[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]')
-        return np.clip(q, arm.lower, arm.upper)
+        beyond = np.maximum(arm.lower - q, q - arm.upper)
+        notes = []
+        for i in np.flatnonzero(beyond > 1e-9):
+            where = (f'start joint {arm.joint_names[i]} = {q[i]:.6g} rad is outside its limits '
+                     f'[{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]')
+            if beyond[i] > margin:
+                raise InvalidRequest(f'{where} by {beyond[i]:.3g} rad, more than the '
+                                     f'start_limit_margin {margin:g} rad')
+            notes.append(f'{where} by {beyond[i]:.3g} rad')
+        return np.where(beyond > 1e-9, q, np.clip(q, arm.lower, arm.upper)), notes
 
     def full(self, x: np.ndarray) -> np.ndarray:
         """Return full joint vectors (N, n_joints): x (N, planned), then the held joints."""
@@ -276,8 +344,8 @@ class Objective:
         """
         Return the constraint residuals, (N, 3 + the ``across`` components held; 3 in free mode).
 
-        They are p - goal and, in radial mode, the components of u across the goal ray (zero
-        where u = +-p / |p|, with both held; see the module docstring).
+        They are p - goal and, with the axis held, the components of u across the axis target
+        (zero where u = +-target, with both held; see the module docstring).
         """
         return self.linear_residuals(p - self.goal, u)
 
@@ -287,19 +355,20 @@ class Objective:
 
         The residuals are linear in p and u, so this also maps their derivatives.
         """
-        return np.concatenate((dp, du @ self.across_basis.T), axis=-1) if self.radial else dp
+        return (np.concatenate((dp, du @ self.across_basis.T), axis=-1) if self.holds_axis
+                else dp)
 
     def axis_angle(self, u: np.ndarray) -> np.ndarray:
-        """Return the angle (rad) between each tool axis u (N, 3) and the goal ray p / |p|."""
+        """Return the angle (rad) between each tool axis u (N, 3) and the axis target."""
         along = u @ self.ray_basis[0]
         across = np.linalg.norm(u @ self.ray_basis[1:].T, axis=1)
         return np.arctan2(across, along)
 
     def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
         """
-        Return the error of eq. (11), plus the axis angle in radial mode (see the module).
+        Return the error of eq. (11), plus the axis angle with the axis held (see the module).
 
-        With one component held across the goal ray (``across``), the angle of u from the plane
+        With one component held across the target (``across``), the angle of u from the plane
         that leaves it; with none, the position error alone.
         """
         return errors_eq11(np.ascontiguousarray(p), np.ascontiguousarray(u), self.goal,

@@ -62,7 +62,7 @@ def curve_constraint(obj: Objective) -> Objective | None:
     planned = obj.arm.planned
     if obj.null_directions == 1:
         return obj
-    if obj.radial and planned in (4, 5):
+    if obj.holds_axis and planned in (4, 5):
         return obj.holding(planned - 4)
     return None
 

@@ -58,7 +58,8 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument('--tool-offset', nargs=3, type=finite_number, metavar=('X', 'Y', 'Z'),
                        default=(0.0, 0.0, 0.0), help='tool point in the tip frame, m')
     group.add_argument('--tool-axis', nargs=3, type=finite_number, metavar=('X', 'Y', 'Z'),
-                       default=(0.0, 0.0, 1.0), help='tool axis in the tip frame (radial mode)')
+                       default=(0.0, 0.0, 1.0),
+                       help='tool axis in the tip frame (radial and approach modes)')
 
 
 def arm_from_arguments(args: argparse.Namespace) -> ArmModel:
@@ -75,7 +76,7 @@ def arm_from_arguments(args: argparse.Namespace) -> ArmModel:
 
 
 def add_motion_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add --profile, --timing, --joint-limits, --max-acceleration and --max-jerk."""
+    """Add --profile, --timing, --joint-limits, --max-acceleration, --max-jerk, the scalings."""
     group = parser.add_argument_group("motion (default: the paper's servo law, eq. 10)")
     group.add_argument('--profile', choices=[p.value for p in Profile], default='servo',
                        help="each joint's velocity profile: servo (starts and stops at once), "
@@ -91,13 +92,21 @@ def add_motion_arguments(parser: argparse.ArgumentParser) -> None:
                        help='acceleration limit of every joint the file gives none, rad/s^2')
     group.add_argument('--max-jerk', type=finite_number, metavar='RAD_S3',
                        help='jerk limit of every joint the file gives none, rad/s^3')
+    group.add_argument('--velocity-scaling', type=finite_number, metavar='S',
+                       help='scale every velocity limit by S in (0, 1], as MoveIt does '
+                            "(default: the file's default_velocity_scaling_factor, else 1)")
+    group.add_argument('--acceleration-scaling', type=finite_number, metavar='S',
+                       help='scale every acceleration limit by S in (0, 1] (default: the '
+                            "file's default_acceleration_scaling_factor, else 1)")
 
 
 def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
     """Return the motion the arguments set (ValueError with the reason)."""
     return MotionProfile.from_file(args.joint_limits, profile=args.profile, timing=args.timing,
                                    max_acceleration=args.max_acceleration,
-                                   max_jerk=args.max_jerk)
+                                   max_jerk=args.max_jerk,
+                                   velocity_scaling=args.velocity_scaling,
+                                   acceleration_scaling=args.acceleration_scaling)
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser) -> None:

@@ -8,7 +8,7 @@ import csv
 import json
 from pathlib import Path
 import sys
-from typing import Any, Iterator, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
@@ -17,7 +17,7 @@ from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanRequest, PlanResult, PlanStatus, prepare)
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
                                           add_motion_arguments, arm_from_arguments,
@@ -36,18 +36,30 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('xyz', nargs='*', type=finite_number, metavar='X Y Z',
                    help='goal position of the tool in metres (omit with --goals)')
     p.add_argument('--goals', metavar='FILE',
-                   help="CSV file, one goal a line: x,y,z[,q1,...,qn start angles]; '-' for stdin")
+                   help='CSV file, one goal a line: x,y,z[,ax,ay,az][,start angles]; a header '
+                        'line names the columns (x,y,z, ax,ay,az for an approach, then the '
+                        "joints by name, or any names for chain order); '-' for stdin")
     p.add_argument('--start', nargs='+', type=finite_number, metavar='Q',
                    help='start joint angles in radians (default: upright, all zero)')
-    p.add_argument('--mode', choices=[m.value for m in Mode], default=Mode.FREE.value)
+    p.add_argument('--mode', choices=[m.value for m in Mode],
+                   help='free (position only), radial (eq. 12-13) or approach (the tool axis '
+                        'along --approach); default approach with --approach, else free')
+    p.add_argument('--approach', nargs=3, type=finite_number, metavar=('AX', 'AY', 'AZ'),
+                   help='approach direction of the tool axis in the base frame (default '
+                        '0 0 -1: from above)')
     p.add_argument('--algorithm', choices=list(ALGORITHMS), default='iepso')
     p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
     p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
                    help='largest error in metres that counts as reached '
                         f'(default {DEFAULT_TOLERANCE})')
-    p.add_argument('--axis-tolerance', type=finite_number, default=DEFAULT_AXIS_TOLERANCE,
-                   metavar='RAD', help='radial mode: largest angle between the tool axis and the '
-                   f'goal ray that counts as radial (default {DEFAULT_AXIS_TOLERANCE})')
+    p.add_argument('--axis-tolerance', type=finite_number, metavar='RAD',
+                   help='largest angle between the tool axis and the goal ray (radial) or the '
+                        'approach direction that counts as met (default '
+                        + ', '.join(f'{k} {v:g}' for k, v in DEFAULT_AXIS_TOLERANCE.items())
+                        + ')')
+    p.add_argument('--start-limit-margin', type=finite_number, default=0.05, metavar='RAD',
+                   help='a start joint this far outside its limits is planned from, the motion '
+                        'bringing it inside (default %(default)s)')
     p.add_argument('--max-planning-time', type=finite_number, default=None, metavar='S',
                    help='longest search per goal in seconds; past it the plan ends as timed_out '
                         'with its best answer (default: no limit)')
@@ -109,33 +121,70 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _goal_lines(path: str) -> Iterator[tuple[int, list[str]]]:
-    """Yield (line number, fields) of the CSV's data lines: no blanks, comments or header row."""
+class Layout(NamedTuple):
+    """The columns of a goals CSV: after x, y, z an approach direction or not, then the start."""
+
+    approach: bool = False
+    #: The start columns' joint names in file order; None: the chain's order.
+    joints: tuple[str, ...] | None = None
+
+
+def _layout(header: list[str], arm: ArmModel) -> Layout:
+    """Return the layout a header line names (UsageError for one that cannot be planned)."""
+    names = [c.lower() for c in header]
+    if names[:3] != ['x', 'y', 'z']:
+        raise UsageError(f"a header must start with x,y,z, got {','.join(header[:3])}")
+    if names[3:7] == ['qx', 'qy', 'qz', 'qw']:
+        raise UsageError('pose goals (qx,qy,qz,qw) are not planned yet; give ax,ay,az, an '
+                         'approach direction of the tool axis')
+    approach = names[3:6] == ['ax', 'ay', 'az']
+    rest = tuple(header[6 if approach else 3:])
+    if not rest or not set(rest) <= set(arm.joint_names):
+        return Layout(approach)
+    if sorted(rest) != sorted(arm.joint_names[:len(rest)]) or len(set(rest)) != len(rest):
+        raise UsageError(f"the header's joints {', '.join(rest)} are not the arm's first "
+                         f"{len(rest)} joints ({', '.join(arm.joint_names)})")
+    return Layout(approach, rest)
+
+
+def _goal_lines(path: str, arm: ArmModel) -> tuple[Layout, list[tuple[int, list[str]]]]:
+    """Return the CSV's layout and its data lines (number, fields): no blanks or comments."""
     handle = sys.stdin if path == '-' else open(path, newline='', encoding='utf-8')
-    first = True
+    layout, lines, first = Layout(), [], True
     with handle:
         for number, row in enumerate(csv.reader(handle), start=1):
             cells = [c.strip() for c in row]
             if len(cells) <= 1 and not any(cells) or cells and cells[0].startswith('#'):
                 continue                                  # a blank line or a comment
-            header = first and not any(_is_number(c) for c in cells)     # e.g. x,y,z,q1,...
+            if first and not any(_is_number(c) for c in cells):     # e.g. x,y,z,ax,ay,az,...
+                layout = _layout(cells, arm)
+            else:
+                lines.append((number, cells))
             first = False
-            if not header:
-                yield number, cells
+    return layout, lines
 
 
-def _parse_line(cells: list[str]) -> tuple[np.ndarray, np.ndarray | None]:
-    if len(cells) < 3:
-        raise UsageError(f'expected x,y,z[,start angles], got {len(cells)} field(s)')
+def _parse_line(cells: list[str], layout: Layout, arm: ArmModel
+                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Return a line's goal, approach direction (or None) and start (or None)."""
+    head = 6 if layout.approach else 3
+    expected = 'x,y,z' + (',ax,ay,az' if layout.approach else '') + '[,start angles]'
+    if len(cells) < head:
+        raise UsageError(f'expected {expected}, got {len(cells)} field(s)')
     if not all(cells):
         empty = [str(i + 1) for i, c in enumerate(cells) if not c]
-        raise UsageError(f"empty field(s) {', '.join(empty)}: expected x,y,z[,start angles]")
+        raise UsageError(f"empty field(s) {', '.join(empty)}: expected {expected}")
     try:
-        values = [float(c) for c in cells]
+        values = np.array([float(c) for c in cells])
     except ValueError as exc:
         raise UsageError(f'not a number: {exc}') from None
-    start = np.array(values[3:]) if len(values) > 3 else None
-    return np.array(values[:3]), start
+    start = values[head:] if len(values) > head else None
+    if start is not None and layout.joints is not None:
+        if len(start) != len(layout.joints):
+            raise UsageError(f'expected {len(layout.joints)} start angles '
+                             f"({', '.join(layout.joints)}), got {len(start)}")
+        start = start[[layout.joints.index(j) for j in arm.joint_names[:len(start)]]]
+    return values[:3], values[3:6] if layout.approach else None, start
 
 
 def _human(result: PlanResult, arm: ArmModel) -> str:
@@ -194,11 +243,15 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
 
 def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
     """Return the settings of ``trajplan plan``'s flags as a request (its goal still empty)."""
+    mode = args.mode or (Mode.APPROACH.value if args.approach else Mode.FREE.value)
+    if args.approach and mode != Mode.APPROACH.value:
+        raise UsageError(f'--approach needs --mode approach, not {mode}')
     request = PlanRequest(
-        (), arm=arm, mode=args.mode, motion=motion_from_arguments(args),
-        angular_velocity=args.angular_velocity, world=world_from_arguments(args, arm),
-        tolerance=args.tolerance, axis_tolerance=args.axis_tolerance, algorithm=args.algorithm,
-        seed=args.seed, max_planning_time=args.max_planning_time)
+        (), arm=arm, mode=mode, approach=args.approach or TOP_DOWN,
+        motion=motion_from_arguments(args), angular_velocity=args.angular_velocity,
+        world=world_from_arguments(args, arm), tolerance=args.tolerance,
+        axis_tolerance=args.axis_tolerance, algorithm=args.algorithm, seed=args.seed,
+        max_planning_time=args.max_planning_time, start_limit_margin=args.start_limit_margin)
     request.validate()
     return request
 
@@ -210,6 +263,10 @@ def _run_plan(args: argparse.Namespace) -> int:
     if not args.sample_period > 0:
         raise UsageError('--sample-period must be positive')
     args.request = request = _request(args, arm)
+    ignored = request.motion.ignored_joints(arm)
+    if ignored:
+        print(f"trajplan: warning: the joint limits' joints {', '.join(ignored)} are not "
+              'planned: ignored', file=sys.stderr)
     kernels = prepare(lambda text: print(f'trajplan: {text}', file=sys.stderr, flush=True))
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
@@ -224,21 +281,26 @@ def _run_plan(args: argparse.Namespace) -> int:
     if args.xyz:
         raise UsageError('give either X Y Z or --goals FILE, not both')
     try:
-        lines = list(_goal_lines(args.goals))
+        layout, lines = _goal_lines(args.goals, arm)
     except OSError as exc:
         raise UsageError(f'cannot read {args.goals}: {exc.strerror}') from None
     failures = 0
     for number, cells in lines:
         try:
-            goal, start = _parse_line(cells)
-        except UsageError as exc:
+            goal, approach, start = _parse_line(cells, layout, arm)
+            if approach is not None:
+                request.replace(mode=Mode.APPROACH, approach=approach).validate()
+        except (UsageError, ValueError) as exc:
             failures += 1
             record = _unparsed(number, str(exc), args, arm)
             print(json.dumps(record) if args.json else record['message'])
             continue
         if start is None:
             start = args.start
-        result = plan(request.replace(goal=goal, start=start))
+        line_request = request.replace(goal=goal, start=start)
+        if approach is not None:
+            line_request = line_request.replace(mode=Mode.APPROACH, approach=approach)
+        result = plan(line_request)
         failures += not result.success
         print(_line(result, number, arm, args))
     return 0 if failures == 0 else 1

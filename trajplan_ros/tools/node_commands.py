@@ -147,7 +147,8 @@ def _run_call(args: argparse.Namespace) -> int:
     from trajplan_ros.tools.ros_client import RosClient
 
     with RosClient('trajplan_call') as ros:
-        return call_planner(ros, _goal(args), service=args.service,
+        service = args.service or ('compute_plan' if args.plan_only else 'plan_trajectory')
+        return call_planner(ros, _goal(args), service=service,
                             tolerance=args.tolerance, timeout=args.timeout,
                             trajectory_topic=args.trajectory, results_topic=args.results)
 
@@ -214,8 +215,11 @@ def add_call_parser(sub: argparse._SubParsersAction) -> None:
                                    "from the node's plan_results, on stderr) or no answer in "
                                    'time.')
     _common(p)
-    p.add_argument('--service', default='plan_trajectory',
-                   help='service name (default plan_trajectory; e.g. /arm1/plan_trajectory)')
+    p.add_argument('--service',
+                   help='service name (default plan_trajectory, or compute_plan with '
+                        '--plan-only; e.g. /arm1/plan_trajectory)')
+    p.add_argument('--plan-only', action='store_true',
+                   help='call compute_plan: the plan is answered, not sent to the controller')
     p.add_argument('--tolerance', type=finite_number, default=0.0,
                    help="largest error in metres that counts as reached (0: the node's "
                         'tolerance parameter)')

@@ -113,7 +113,7 @@ class _Child:
         if answer['joints'] is None:
             raise ValueError(f"the baseline rejected goal {list(goal)}: {answer['message']}")
         joints = np.array(answer['joints'])
-        planned = arm.without_idle_tail(mode is Mode.RADIAL).planned
+        planned = arm.without_idle_tail(mode is not Mode.FREE).planned
         return Answer(joints[:planned], joints=joints, seconds=answer['seconds'])
 
 

@@ -224,9 +224,11 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
         raise UsageError(str(exc)) from None
     if dropped:
         print(f'{dropped} drawn goal(s) dropped: the reference found no '
-              f"{'radial ' if mode is Mode.RADIAL else ''}pose for them.")
+              f"{'' if mode is Mode.FREE else mode.value + ' '}pose for them"
+              f"{' (or they lie below the base)' if mode is Mode.APPROACH else ''}.")
     print("success = error <= 1 um by yourdfpy's FK (radial: axis within 1e-6 rad of the goal "
-          'ray) and motion time at most 0.1 % above the reference; time = wall time per plan.\n')
+          'ray; approach, from above: within 1e-3 rad) and motion time at most 0.1 % above the '
+          'reference; time = wall time per plan.\n')
     if args.quiet or importlib.util.find_spec('tqdm') is None:
         results = run_chain(methods, cases, arm, mode, fk, profile=args.motion)
     else:

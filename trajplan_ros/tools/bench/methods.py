@@ -125,7 +125,7 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
                   shaping=shaping, optimizer_options=options, motion=profile)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
-    planned = arm.without_idle_tail(mode is Mode.RADIAL).planned      # as the objective plans
+    planned = arm.without_idle_tail(mode is not Mode.FREE).planned      # as the objective plans
     return Answer(result.joint_goal[:planned], result)
 
 
