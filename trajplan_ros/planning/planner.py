@@ -197,20 +197,13 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     return _collision_free(result, obj, r.world, r.seed, r.tolerance, clock)
 
 
-#: Approach mode on arms of at most this many planned joints first holds one axis component.
-_SMALL_ARM = 5
-
-
 def _search(obj: Objective, r: PlanRequest,
             interrupt: Interrupt | None) -> tuple[Objective, OptimizeResult]:
     """
     Run the request's optimiser on ``obj``; return the objective searched and what it found.
 
-    Approach mode on a small arm (``_SMALL_ARM`` planned joints or fewer) first holds only the
-    tool axis's component in the goal's vertical plane. A pan-and-pitch arm such as the SO-101
-    cannot turn the other one at all where its axis points down (its pitch joints turn in that
-    plane, its pan and roll axes lie along the axis), so holding both makes a singular system
-    whose search ends far from the fastest pose. The answer stands when the other component is
+    Approach mode on a small arm first searches ``Objective.in_plane``: the tool axis's
+    component in the goal's vertical plane alone. The answer stands when the other component is
     within ``axis_tolerance`` too (it is then the fastest of a larger set); else the search
     holds both.
     """
@@ -219,8 +212,8 @@ def _search(obj: Objective, r: PlanRequest,
                                        max_iter=r.max_iterations, tol=r.convergence_precision,
                                        seed=r.seed, interrupt=interrupt, **r.optimizer_options)
 
-    if obj.mode is Mode.APPROACH and obj.arm.planned <= _SMALL_ARM:
-        one = obj.holding(1)
+    one = obj.in_plane()
+    if one is not None:
         found = search(one)
         p, u = one.tool(found.x[None])
         if (found.interrupted is not None or (np.linalg.norm(p[0] - obj.goal) <= r.tolerance

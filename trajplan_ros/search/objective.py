@@ -63,6 +63,9 @@ class Mode(str, Enum):
 
 #: The approach direction of a grasp from above (base frame).
 TOP_DOWN = (0.0, 0.0, -1.0)
+#: Approach mode on arms of at most this many planned joints first holds one axis component
+#: (``Objective.in_plane``).
+SMALL_ARM = 5
 
 
 class InvalidRequest(ValueError):
@@ -225,6 +228,20 @@ class Objective:
                                               approach=self.approach,
                                               start_margin=self.start_margin)
         return self._holding[across]
+
+    def in_plane(self) -> Objective | None:
+        """
+        Return this goal holding only the axis component in the goal's vertical plane, or None.
+
+        Only approach mode on arms of at most ``SMALL_ARM`` planned joints has one. A
+        pan-and-pitch arm such as the SO-101 cannot turn the other component at all where its
+        axis points down (its pitch joints turn in that plane, its pan and roll axes lie along
+        the axis; a URDF's micro-radian offsets leave it a little off), so holding both makes a
+        singular system whose search ends far from the fastest pose.
+        """
+        if self.mode is not Mode.APPROACH or self.arm.planned > SMALL_ARM:
+            return None
+        return self.holding(1)
 
     @property
     def null_directions(self) -> int:
