@@ -150,6 +150,29 @@ def test_a_goal_pose_in_a_root_frame_above_the_base_is_planned_in_the_base(
                      r'robot; known frames: base_link, .*world', mark)
 
 
+def test_a_goal_pose_orientation_is_the_approach_direction(planner, describe, peer) -> None:
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    results = peer.set_parameters(f'{NS}/trajplan', [
+        Parameter('goal_orientation', value='approach')])
+    assert results[0].successful, results[0].reason
+    mark = planner.mark()
+    pose = PoseStamped()
+    pose.header.frame_id = 'base_link'
+    pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = 0.2, 0.1, 0.02
+    pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0     # z axis down: from above
+    peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
+    line = planner.wait_for(r'goal_pose #\d+ \(0.2, 0.1, 0.02\) m from q = .*: reached in .*, '
+                            r'axis (\S+) rad from the approach direction', mark)
+    assert float(line.group(1)) <= 1e-3
+    pose.pose.orientation.x, pose.pose.orientation.w = 0.0, 1.0     # z axis up: not from above
+    peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
+    planner.wait_for(r'goal_pose #\d+ \(0.2, 0.1, 0.02\) m from q = .*: not_reached: .*, axis '
+                     r'\S+ rad from the approach direction', mark)
+    results = peer.set_parameters(f'{NS}/trajplan', [Parameter('goal_orientation',
+                                                               value='ignore')])
+    assert results[0].successful
+
+
 def test_compute_plan_answers_and_publishes_nothing(
         planner, describe, peer, trajectories) -> None:
     describe(SO101.urdf.read_text(encoding='utf-8'))
