@@ -16,6 +16,7 @@ WORLD = ('<link name="world"/><joint name="world_to_base" type="fixed"><parent l
 
 
 def so101_in_a_world() -> str:
+    """Return the SO-101 URDF with ``WORLD`` above its base link."""
     text = PUBLISHED['so101'].urdf.read_text(encoding='utf-8')
     return text.replace('<link name="base_link"', WORLD + '<link name="base_link"', 1)
 
@@ -26,7 +27,7 @@ def test_every_link_is_posed_as_yourdfpy_poses_it() -> None:
     other = yourdfpy.URDF.load(str(PUBLISHED['so101'].urdf), build_scene_graph=True,
                                load_meshes=False, load_collision_meshes=False)
     rng = np.random.default_rng(7)
-    names = [j for j in other.actuated_joint_names]
+    names = list(other.actuated_joint_names)
     for _ in range(5):
         q = dict(zip(names, rng.uniform(-1.5, 1.5, len(names))))
         other.update_cfg(q)
