@@ -12,6 +12,10 @@ from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.node import request_problem
+from trajplan_ros.ros.settings import default_values, Settings
+
+#: The node's settings with every parameter at its default (the paper's arm).
+SETTINGS = Settings.from_parameters(default_values())
 
 
 ARM = ('joint1', 'joint2', 'joint3')
@@ -122,17 +126,18 @@ def request(tolerance: float, frame: str = '') -> GetPlan.Request:
 
 @pytest.mark.parametrize('tolerance', [-1.0, math.inf, math.nan])
 def test_bad_tolerances_are_refused(tolerance) -> None:
-    assert 'is not allowed' in request_problem(request(tolerance), 'base_link')
+    assert 'is not allowed' in request_problem(request(tolerance), SETTINGS)
 
 
-def test_zero_and_positive_tolerances_and_our_frame_pass() -> None:
-    for r in (request(0.0), request(1e-3, 'base_link'), request(0.0, '')):
-        assert request_problem(r, 'base_link') is None
+def test_zero_and_positive_tolerances_and_the_robots_frames_pass() -> None:
+    for r in (request(0.0), request(1e-3, 'base_link'), request(0.0, ''),
+              request(0.0, 'link3')):                   # a link of the paper arm's URDF
+        assert request_problem(r, SETTINGS) is None
 
 
-def test_a_goal_in_another_frame_is_refused() -> None:
-    reason = request_problem(request(0.0, 'map'), 'base_link')
-    assert "frame 'map'" in reason and "base_frame 'base_link'" in reason
+def test_a_goal_in_a_frame_the_robot_does_not_have_is_refused() -> None:
+    reason = request_problem(request(0.0, 'map'), SETTINGS)
+    assert reason.startswith("frame 'map' is not a link of the robot; known frames: base_link")
 
 
 def test_diagnostics_warn_on_slow_calls_and_superseded_goals() -> None:

@@ -67,11 +67,13 @@ class RobotFrames:
 def _joint_motion(kind: str, axis: np.ndarray | None, value: float) -> np.ndarray:
     """Return a joint's motion at ``value``: a turn about its axis, a slide along it, or none."""
     motion = np.eye(4)
+    if kind not in ('revolute', 'continuous', 'prismatic'):
+        return motion
     u = np.array([1.0, 0.0, 0.0] if axis is None else axis, dtype=float)
     u = u / np.linalg.norm(u)
-    if kind in ('revolute', 'continuous'):
+    if kind != 'prismatic':
         k = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
         motion[:3, :3] = np.eye(3) + np.sin(value) * k + (1.0 - np.cos(value)) * k @ k
-    elif kind == 'prismatic':
+    else:
         motion[:3, 3] = value * u
     return motion
