@@ -92,3 +92,15 @@ def test_trajplan_plans_approach_goals_and_reads_a_csv_header(
     goals.write_text('x,y,z,qx,qy,qz,qw\n0.2,0.1,0.02,0,0,0,1\n', encoding='utf-8')
     assert main(['plan', '--goals', str(goals), *urdf]) == 2
     assert 'pose goals (qx,qy,qz,qw) are not planned yet' in capsys.readouterr().err
+
+
+def test_only_a_pan_and_pitch_arm_first_holds_the_in_plane_component() -> None:
+    goal, down = np.array([0.2, 0.1, 0.05]), 'approach'
+    for name, expected in (('so101', True), ('ur5', False), ('panda', False)):
+        arm = published(name)
+        start = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
+        obj = Objective(arm, goal, start, mode=down)
+        assert obj.pan_and_pitch() is expected, name
+        assert (obj.in_plane() is not None) is expected
+    assert Objective(paper_arm(), goal, np.zeros(5), mode=down).pan_and_pitch()
+    assert Objective(paper_arm(), goal, np.zeros(5)).in_plane() is None        # free mode

@@ -63,9 +63,9 @@ class Mode(str, Enum):
 
 #: The approach direction of a grasp from above (base frame).
 TOP_DOWN = (0.0, 0.0, -1.0)
-#: Approach mode on arms of at most this many planned joints first holds one axis component
-#: (``Objective.in_plane``).
-SMALL_ARM = 5
+#: Largest sine of the angle between two joint axes that counts as parallel (``pan_and_pitch``):
+#: a URDF's axes are off by micro-radians.
+PARALLEL = 1e-3
 
 
 class InvalidRequest(ValueError):
@@ -233,15 +233,31 @@ class Objective:
         """
         Return this goal holding only the axis component in the goal's vertical plane, or None.
 
-        Only approach mode on arms of at most ``SMALL_ARM`` planned joints has one. A
-        pan-and-pitch arm such as the SO-101 cannot turn the other component at all where its
-        axis points down (its pitch joints turn in that plane, its pan and roll axes lie along
-        the axis; a URDF's micro-radian offsets leave it a little off), so holding both makes a
-        singular system whose search ends far from the fastest pose.
+        Only approach mode on a pan-and-pitch arm (``pan_and_pitch``) has one. Such an arm,
+        the SO-101, cannot turn the other component at all where its axis points down (its
+        pitch joints turn in that plane, its pan and roll axes lie along the axis; a URDF's
+        micro-radian offsets leave it a little off), so holding both makes a singular system
+        whose search ends far from the fastest pose.
         """
-        if self.mode is not Mode.APPROACH or self.arm.planned > SMALL_ARM:
+        if self.mode is not Mode.APPROACH or not self.pan_and_pitch():
             return None
         return self.holding(1)
+
+    def pan_and_pitch(self) -> bool:
+        """
+        Return whether the planned joints are a pan, parallel pitch joints and rolls of the tool.
+
+        That is, every planned joint after the first turns about one common axis or about the
+        tool axis, at the start and at a pose 0.5 rad further on every joint (a joint's axis can
+        meet the tool axis at one pose by chance; a roll's does at every pose).
+        """
+        poses = np.stack((self.planned_start, self.planned_start + 0.5))
+        rows = self.tool_jacobian(poses).rows
+        z = rows[4::3] / np.linalg.norm(rows[4::3], axis=2, keepdims=True)   # (planned, 2, 3)
+        roll = np.all(np.linalg.norm(np.cross(z, rows[1]), axis=2) <= PARALLEL, axis=1)
+        pitch = [i for i in range(1, self.arm.planned) if not roll[i]]
+        return all(np.all(np.linalg.norm(np.cross(z[i], z[pitch[0]]), axis=1) <= PARALLEL)
+                   for i in pitch)
 
     @property
     def null_directions(self) -> int:
