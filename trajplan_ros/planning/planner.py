@@ -203,9 +203,9 @@ def _search(obj: Objective, r: PlanRequest,
     Run the request's optimiser on ``obj``; return the objective searched and what it found.
 
     Approach mode on a pan-and-pitch arm first searches ``Objective.in_plane``: the tool
-    axis's component in the goal's vertical plane alone. The answer stands when the other component is
-    within ``axis_tolerance`` too (it is then the fastest of a larger set); else the search
-    holds both.
+    axis's component in the goal's vertical plane alone. The answer stands when the other
+    component is within ``axis_tolerance`` too (it is then the fastest of a larger set); else
+    the search holds both.
     """
     def search(objective: Objective) -> OptimizeResult:
         return ALGORITHMS[r.algorithm](objective, population=r.population,
