@@ -191,6 +191,10 @@ def test_trajplan_call_plans_through_the_service(planner) -> None:
     assert done.returncode == 1, done.stdout + done.stderr
     assert re.search(r'^trajplan: not planned: rejected: goal is 1\.0000 m from the base, '
                      r"beyond the arm's reach", done.stderr, re.M), done.stderr
+    done = trajplan('call', '0.17', '0.06', '0.12', '--frame', 'map')
+    called = "calling plan_trajectory, goal (0.17, 0.06, 0.12) m in frame 'map'"
+    assert done.returncode == 1 and called in done.stdout, done.stdout + done.stderr
+    assert "not planned: refused: frame 'map' is not a link of the robot" in done.stderr
     mark = planner.mark()                     # --plan-only: compute_plan, the answer alone
     done = trajplan('call', '0.17', '0.06', '0.12', '--plan-only')
     assert done.returncode == 0 and 'calling compute_plan' in done.stdout, done.stdout

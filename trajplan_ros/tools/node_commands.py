@@ -41,14 +41,19 @@ def _need_rclpy() -> None:
                          '(or source a ROS 2 installation)')
 
 
-def print_path(path: Any, goal: Goal) -> None:
-    """Print a GetPlan answer's tool path: its size, frame, last pose and error to the goal."""
+def print_path(path: Any, goal: Goal, frame: str = '') -> None:
+    """
+    Print a GetPlan answer's tool path: its size, frame, last pose and error to the goal.
+
+    The error only for a goal in the path's frame (``frame`` empty or the same).
+    """
     pose = path.poses[-1].pose
     p, o = pose.position, pose.orientation
     print(f"tool path: {len(path.poses)} poses in frame '{path.header.frame_id}'; last pose "
           f'position ({p.x:.6f}, {p.y:.6f}, {p.z:.6f}) m, orientation (x, y, z, w) '
           f'({o.x:.4f}, {o.y:.4f}, {o.z:.4f}, {o.w:.4f})')
-    print(f"position error: {describe_residual(math.dist((p.x, p.y, p.z), goal), 'm')}")
+    if frame in ('', path.header.frame_id):
+        print(f"position error: {describe_residual(math.dist((p.x, p.y, p.z), goal), 'm')}")
 
 
 def print_trajectory(trajectory: Any, topic: str) -> None:
@@ -107,12 +112,14 @@ def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
 
 
 def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeout: float,
-                 trajectory_topic: str | None, results_topic: str | None = None) -> int:
+                 trajectory_topic: str | None, results_topic: str | None = None,
+                 frame: str = '') -> int:
     """
     Call the planning service with ``goal`` and print the answer; 0 for a plan, 1 for none.
 
-    With ``trajectory_topic``, also wait for the trajectory the node publishes there and print
-    it (the node answers first, then publishes).
+    ``frame``: the goal's frame_id (empty: the node's base frame). With ``trajectory_topic``,
+    also wait for the trajectory the node publishes there and print it (the node answers
+    first, then publishes).
     """
     from diagnostic_msgs.msg import DiagnosticStatus
     from nav_msgs.srv import GetPlan
@@ -124,8 +131,10 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     results = ros.inbox(DiagnosticStatus, results_topic or _beside(service, outcomes.TOPIC),
                         timeout, outcomes.QOS)
     box = ros.inbox(JointTrajectory, trajectory_topic, timeout) if trajectory_topic else None
-    print(f'calling {service}, goal ({goal[0]}, {goal[1]}, {goal[2]}) m')
+    where = f" in frame '{frame}'" if frame else ''
+    print(f'calling {service}, goal ({goal[0]}, {goal[1]}, {goal[2]}) m{where}')
     request = plan_request(goal, tolerance)
+    request.goal.header.frame_id = frame
     request.goal.header.stamp = ros.node.get_clock().now().to_msg()
     stamp = outcomes.describe_stamp((request.goal.header.stamp.sec,
                                      request.goal.header.stamp.nanosec))
@@ -138,7 +147,7 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     if box is not None:
         print_trajectory(_next(box, timeout, f'JointTrajectory on {trajectory_topic}'),
                          trajectory_topic)
-    print_path(path, goal)
+    print_path(path, goal, frame)
     return 0
 
 
@@ -150,7 +159,8 @@ def _run_call(args: argparse.Namespace) -> int:
         service = args.service or ('compute_plan' if args.plan_only else 'plan_trajectory')
         return call_planner(ros, _goal(args), service=service,
                             tolerance=args.tolerance, timeout=args.timeout,
-                            trajectory_topic=args.trajectory, results_topic=args.results)
+                            trajectory_topic=args.trajectory, results_topic=args.results,
+                            frame=args.frame)
 
 
 def _run_goal(args: argparse.Namespace) -> int:
@@ -196,7 +206,8 @@ def _goal(args: argparse.Namespace) -> Goal:
 def _common(p: argparse.ArgumentParser) -> None:
     for axis in 'xyz':
         p.add_argument(axis, type=finite_number, metavar=axis.upper(),
-                       help=f"tool goal's {axis} in metres, in the planner's base frame")
+                       help=f"tool goal's {axis} in metres, in the planner's base frame "
+                            '(call: or --frame)')
     p.add_argument('--timeout', type=float, default=30.0,
                    help='seconds to wait for the node and for each answer (default 30)')
     p.add_argument('--trajectory', metavar='TOPIC', nargs='?', const='joint_trajectory',
@@ -218,6 +229,9 @@ def add_call_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--service',
                    help='service name (default plan_trajectory, or compute_plan with '
                         '--plan-only; e.g. /arm1/plan_trajectory)')
+    p.add_argument('--frame', default='',
+                   help="the goal's frame: any link of the robot's URDF (default: the node's "
+                        'base_frame)')
     p.add_argument('--plan-only', action='store_true',
                    help='call compute_plan: the plan is answered, not sent to the controller')
     p.add_argument('--tolerance', type=finite_number, default=0.0,
