@@ -28,7 +28,7 @@ from trajplan_ros.motion.motion_profile import MotionProfile, SCALING_KEYS
 from trajplan_ros.search.baselines import de, ga, pso, spso
 from trajplan_ros.search.fuzzy import RewardPunishment
 from trajplan_ros.search.iepso import iepso
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN, unit_direction
 from trajplan_ros.search.optimize import OptimizeResult
 
 __all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
@@ -175,17 +175,13 @@ class PlanRequest:
                     'axis_tolerance': self.axis_limit}
         if self.max_planning_time is not None:
             positive['max_planning_time'] = self.max_planning_time
-        if not (isinstance(self.start_limit_margin, (int, float))
-                and 0.0 <= self.start_limit_margin < np.inf):
-            raise ValueError('start_limit_margin must be finite and not negative, '
-                             f'got {self.start_limit_margin!r}')
         for name, value in positive.items():
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
                 raise ValueError(f'{name} must be finite and positive, got {value!r}')
-        if not (isinstance(self.convergence_precision, (int, float))
-                and np.isfinite(self.convergence_precision) and self.convergence_precision >= 0):
-            raise ValueError('convergence_precision must be finite and not negative, '
-                             f'got {self.convergence_precision!r}')
+        for name in ('convergence_precision', 'start_limit_margin'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
+                raise ValueError(f'{name} must be finite and not negative, got {value!r}')
         for name, least in (('population', 2), ('max_iterations', 1)):
             value = getattr(self, name)
             if (isinstance(value, bool) or not isinstance(value, (int, np.integer))
@@ -197,9 +193,7 @@ class PlanRequest:
             raise ValueError(f'seed must be None, an integer >= 0 or a numpy Generator, '
                              f'got {self.seed!r}')
         self._check_options()
-        d = np.asarray(self.approach)
-        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
-            raise ValueError(f'approach must be 3 finite numbers, not all zero, got {list(d)}')
+        unit_direction(self.approach)
         arm = self.planned_arm
         if self.world is not None and self.world.arm.geometry.arm.joint_names != arm.joint_names:
             raise ValueError(f'the collision model is of joints '

@@ -14,6 +14,7 @@ from typing import Callable
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import Header
+from trajplan_ros.collision.scene import pose_matrix
 from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros.joint_states import PlanStart
@@ -58,12 +59,6 @@ def _refusal(where: str, result: PlanResult, took: str) -> str:
     return f'{where}: {result.status.value}: {result.message}{optimised}'
 
 
-def approach_axis(orientation: tuple[float, float, float, float]) -> np.ndarray:
-    """Return the z axis of a quaternion (x, y, z, w): a pose goal's approach direction."""
-    x, y, z, w = np.asarray(orientation, dtype=float) / np.linalg.norm(orientation)
-    return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
-
-
 def in_base(job: Job, settings: Settings,
             start: PlanStart) -> tuple[np.ndarray, np.ndarray | None]:
     """
@@ -75,7 +70,8 @@ def in_base(job: Job, settings: Settings,
     s = settings
     direction = None
     if s.goal_orientation == 'approach' and job.orientation is not None:
-        direction = approach_axis(job.orientation)
+        q = np.asarray(job.orientation, dtype=float)      # a rotation: goal_problem checked
+        direction = pose_matrix((0.0, 0.0, 0.0), q / np.linalg.norm(q), job.label)[:3, 2]
     if job.frame in ('', s.base_frame):
         return np.asarray(job.goal, dtype=float), direction
     pose = s.frames.to_base(job.frame, dict(zip(s.arm.joint_names, start.q)))

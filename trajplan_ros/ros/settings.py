@@ -211,11 +211,10 @@ class Settings:
         """Return the collision model, the scene_file's obstacles and the padding (or None)."""
         return self.request.world
 
-    @property
+    @functools.cached_property
     def frames(self) -> RobotFrames:
         """Return the robot's link frames: a goal may be in any of them (or in base_frame)."""
-        urdf = self.description or urdf_xml(self.arm, velocity=DEFAULT_OMEGA)
-        return _frames(urdf.encode(), self.arm.base_link)
+        return _frames(_urdf(self.description, self.arm).encode(), self.arm.base_link)
 
     def planning_with(self, **changes: Any) -> Settings:
         """Return these settings with ``changes`` to the plan's (``PlanRequest``'s fields)."""
@@ -315,7 +314,7 @@ def _world(values: Mapping[str, Any], arm: ArmModel, description: str,
     """Return the collision world the parameters ask for (None: collision_check is off)."""
     if not values['collision_check']:
         return None
-    urdf = description or urdf_xml(arm, velocity=DEFAULT_OMEGA)
+    urdf = _urdf(description, arm)
     model = _collision_model(urdf.encode(), arm.base_link, arm.tip_link,
                              values['robot_description_semantic'] or topic_semantic)
     scene = _scene(values['scene_file']) if values['scene_file'] else Scene()
@@ -333,6 +332,11 @@ def _collision_model(urdf: bytes, base_link: str, tip_link: str, srdf: str) -> A
     return ArmCollision.from_urdf(urdf, ArmModel.from_urdf(urdf, base_link, tip_link),
                                   meshes=MeshSource(get_package_share_directory),
                                   srdf=srdf or None)
+
+
+def _urdf(description: str, arm: ArmModel) -> str:
+    """Return the arm's URDF: its description, or one written from the DH parameters."""
+    return description or urdf_xml(arm, velocity=DEFAULT_OMEGA)
 
 
 @functools.lru_cache(maxsize=4)

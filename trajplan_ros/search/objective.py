@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-from typing import NamedTuple
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
@@ -44,7 +44,7 @@ from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'TOP_DOWN',
-           'direction_basis', 'errors_eq11']
+           'direction_basis', 'errors_eq11', 'unit_direction']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -79,6 +79,14 @@ class Evaluation:
     efficiency: np.ndarray      # F (eq. 9), s
     motion_time: np.ndarray     # R (eq. 10), s
     error: np.ndarray           # constraint error fed to S (eq. 11), m
+
+
+def unit_direction(direction: np.ndarray | Sequence[float]) -> np.ndarray:
+    """Return an approach direction as a unit vector; InvalidRequest if it has none."""
+    d = np.array(direction, dtype=float).ravel()
+    if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+        raise InvalidRequest(f'approach must be 3 finite numbers, not all zero, got {d.tolist()}')
+    return d / np.linalg.norm(d)
 
 
 def direction_basis(direction: np.ndarray, hint: np.ndarray | None = None) -> np.ndarray:
@@ -161,7 +169,7 @@ class Objective:
                  start_margin: float = 0.0) -> None:
         self.arm = arm
         self.mode = Mode(mode)
-        self.approach = self._check_direction(approach)
+        self.approach = unit_direction(approach)
         if type(across) is not int or not 0 <= across <= 2:
             raise ValueError(f'across must be 0, 1 or 2, got {across!r}')
         if not (np.isfinite(omega) and omega > 0):
@@ -291,15 +299,6 @@ class Objective:
         hint = (None if self.mode is Mode.RADIAL else
                 np.cross(self.approach, (-self.goal[1], self.goal[0], 0.0)))
         return direction_basis(self.axis_target, hint)
-
-    @staticmethod
-    def _check_direction(direction: np.ndarray | tuple[float, ...]) -> np.ndarray:
-        """Return an approach direction as a unit vector; InvalidRequest if it has none."""
-        d = np.array(direction, dtype=float).ravel()
-        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
-            raise InvalidRequest(f'approach direction must be 3 finite numbers, not all zero, '
-                                 f'got {d.tolist()}')
-        return d / np.linalg.norm(d)
 
     @staticmethod
     def _search_box(lower: np.ndarray, upper: np.ndarray,

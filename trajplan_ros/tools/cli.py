@@ -288,18 +288,16 @@ def _run_plan(args: argparse.Namespace) -> int:
     for number, cells in lines:
         try:
             goal, approach, start = _parse_line(cells, layout, arm)
+            line_request = request.replace(goal=goal, start=args.start if start is None
+                                           else start)
             if approach is not None:
-                request.replace(mode=Mode.APPROACH, approach=approach).validate()
+                line_request = line_request.replace(mode=Mode.APPROACH, approach=approach)
+                line_request.validate()
         except (UsageError, ValueError) as exc:
             failures += 1
             record = _unparsed(number, str(exc), args, arm)
             print(json.dumps(record) if args.json else record['message'])
             continue
-        if start is None:
-            start = args.start
-        line_request = request.replace(goal=goal, start=start)
-        if approach is not None:
-            line_request = line_request.replace(mode=Mode.APPROACH, approach=approach)
         result = plan(line_request)
         failures += not result.success
         print(_line(result, number, arm, args))

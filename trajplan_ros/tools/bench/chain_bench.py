@@ -227,8 +227,9 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
         except InvalidRequest:
             dropped += 1
             continue
-        best_time, best = minimax_reference(obj.in_plane() or obj, rng, starts)
-        if best is None and obj.in_plane() is not None:        # the other component is off
+        staged = obj.in_plane()
+        best_time, best = minimax_reference(staged or obj, rng, starts)
+        if best is None and staged is not None:        # the other component is off
             best_time, best = minimax_reference(obj, rng, starts)
         if best is None:
             dropped += 1
