@@ -35,7 +35,7 @@ def objective(name: str) -> Objective:
 
 
 def residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
-    return obj.residuals(*obj.tool(x))
+    return obj.residuals(obj.tool(x))
 
 
 @pytest.mark.parametrize('name', NAMES)

@@ -4,7 +4,8 @@
 import numpy as np
 from std_msgs.msg import Header
 from trajplan_ros import paper_arm, servo_trajectory
-from trajplan_ros.ros.messages import path_msg, quaternions, trajectory_msg
+from trajplan_ros.kinematics.rotations import quaternions
+from trajplan_ros.ros.messages import path_msg, trajectory_msg
 
 
 ARM = paper_arm()

@@ -39,16 +39,18 @@ def test_fewer_axis_conditions_leave_the_axis_freer():
     x = np.random.default_rng(1).uniform(ARM.lower[:4], ARM.upper[:4], (8, 4))
     full, one, none = (Objective(ARM, TARGET, np.zeros(5), mode='radial', across=n)
                        for n in (2, 1, 0))
-    p, u = full.tool(x)
-    assert [o.residuals(p, u).shape[1] for o in (full, one, none)] == [5, 4, 3]
+    tool = full.tool(x)
+    p, u = tool
+    assert [o.residuals(tool).shape[1] for o in (full, one, none)] == [5, 4, 3]
     out_of_plane = np.arcsin(np.abs(u @ full.ray_basis[1]))
-    np.testing.assert_allclose(one.errors(p, u) ** 2,
-                               none.errors(p, u) ** 2 + (ARM.reach * out_of_plane) ** 2)
-    np.testing.assert_allclose(none.errors(p, u), np.linalg.norm(p - TARGET, axis=1))
+    np.testing.assert_allclose(one.errors(tool) ** 2,
+                               none.errors(tool) ** 2 + (ARM.reach * out_of_plane) ** 2)
+    np.testing.assert_allclose(none.errors(tool), np.linalg.norm(p - TARGET, axis=1))
     in_plane = u - np.outer(u @ full.ray_basis[1], full.ray_basis[1])
     in_plane /= np.linalg.norm(in_plane, axis=1)[:, None]
-    assert np.all(np.abs(one.residuals(p, in_plane)[:, 3]) < 1e-15)    # on its constraints,
-    np.testing.assert_allclose(one.errors(p, in_plane), none.errors(p, u))  # no axis error
+    turned = np.stack((p, in_plane))
+    assert np.all(np.abs(one.residuals(turned)[:, 3]) < 1e-15)         # on its constraints,
+    np.testing.assert_allclose(one.errors(turned), none.errors(tool))  # no axis error
     with pytest.raises(ValueError, match='across'):
         Objective(ARM, TARGET, np.zeros(5), mode='radial', across=3)
 

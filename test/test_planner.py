@@ -23,6 +23,7 @@ TARGET = PAPER_TARGET.tolist()
 #: Inside the reach sphere but out of reach: IEPSO searches it for dozens of iterations.
 FAR = [0.36, 0.0, 0.05]
 KEYS = {'goal', 'success', 'status', 'joint_goal', 'position_error_m', 'axis_error_rad',
+        'orientation_error_rad',
         'motion_time_s', 'efficiency', 'iterations', 'evaluations', 'plan_time_s', 'algorithm',
         'mode', 'profile', 'timing', 'clearance_m', 'clearance_pair', 'message'}
 
@@ -142,7 +143,7 @@ def test_a_request_is_checked_with_one_line_reasons() -> None:
         with pytest.raises(ValueError, match=reason):
             plan(good.replace(**change))
     with pytest.raises(ValueError,
-                       match="mode must be one of free, radial, approach, got 'sideways'"):
+                       match="mode must be one of free, radial, approach, pose, got 'sideways'"):
         PlanRequest(TARGET, mode='sideways')
     with pytest.raises(TypeError, match='unknown setting.* omeg; a plan takes algorithm'):
         plan(TARGET, omeg=1.0)

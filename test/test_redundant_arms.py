@@ -218,7 +218,7 @@ def test_the_polish_finds_the_local_minimum_it_starts_near(name: str) -> None:
         x0 = np.clip(best + rng.normal(0.0, 0.05, best.shape), obj.lower, obj.upper)
         x = polish(obj, x0[None], max_steps=40)[0]
         ours = obj.motion_time(x[None])[0]
-        assert obj.errors(*obj.tool(x[None]))[0] <= 1e-9
+        assert obj.errors(obj.tool(x[None]))[0] <= 1e-9
         if ours > obj.motion_time(best[None])[0] * (1 + 1e-4):
             again = local_minimax(obj, x)                  # SLSQP sees no way down from ours
             assert again is not None

@@ -26,7 +26,7 @@ def test_the_curve_is_the_one_with_one_free_direction() -> None:
     assert curve_constraint(free) is free                       # 4 joints, 3 equations
     radial = curve_constraint(Objective(ARM, TARGET, np.zeros(5), mode='radial'))
     assert radial is not None and radial.holds_axis                # isolated: the position curve
-    assert radial.residuals(*radial.tool(np.zeros((1, 4)))).shape == (1, 3)
+    assert radial.residuals(radial.tool(np.zeros((1, 4)))).shape == (1, 3)
     goal = SIX.tool(np.full((1, 6), 0.3))[0][0]
     assert curve_constraint(Objective(SIX, goal, np.zeros(6))) is None     # a 3-D set
     six_radial = Objective(SIX, goal, np.zeros(6), mode='radial')
@@ -53,8 +53,7 @@ def test_radial_solutions_of_five_joints_lie_on_the_curves_the_search_follows() 
     assert obj.arm.planned == 5 and len(curve.across_basis) == 1
     probes = np.random.default_rng(0).uniform(obj.lower, obj.upper, (3000, 5))
     x = project_onto_curves(obj, probes, 40)
-    p, u = obj.tool(x)
-    found = x[(obj.errors(p, u) < 1e-10) & obj.arm.within_limits(obj.full(x))]
+    found = x[(obj.errors(obj.tool(x)) < 1e-10) & obj.arm.within_limits(obj.full(x))]
     solutions = found[np.unique(np.round(found, 4), axis=0, return_index=True)[1]]
     assert len(solutions) >= 4
     on_curve = Linearisation.at(curve, solutions, 1.0)
@@ -71,8 +70,7 @@ def test_follow_walks_along_the_solutions_both_ways() -> None:
     along = follow(obj, x[None, :], 0.3, 6)
     assert along.shape == (1, 13, 4)
     np.testing.assert_array_equal(along[0, 6], x)
-    p, u = obj.tool(along[0])
-    assert np.all(obj.errors(p, u) < 1e-3)                      # one Newton step per sample
+    assert np.all(obj.errors(obj.tool(along[0])) < 1e-3)       # one Newton step per sample
     gaps = np.linalg.norm(np.diff(along[0], axis=0), axis=1)
     assert np.all((gaps > 0.2) & (gaps < 0.4))                  # evenly spaced, in order
 

@@ -27,6 +27,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.shapes import Shape
+from trajplan_ros.kinematics.rotations import QUATERNION_SLACK, rotation_matrix
 import yaml
 
 __all__ = ['MAX_OBSTACLES', 'Obstacle', 'Scene', 'pose_matrix']
@@ -44,14 +45,11 @@ def pose_matrix(position: Iterable[float], orientation: Iterable[float], where: 
     p = _numbers(position, 3, f'{where} position')
     x, y, z, w = _numbers(orientation, 4, f'{where} orientation')
     size = np.sqrt(x * x + y * y + z * z + w * w)
-    if not abs(size - 1.0) < 1e-3:
+    if not abs(size - 1.0) < QUATERNION_SLACK:
         raise InvalidCollisionInput(f'{where}: orientation must be a unit quaternion (x, y, z, '
                                     f'w), its norm is {size:.6g}')
-    x, y, z, w = x / size, y / size, z / size, w / size
     out = np.eye(4)
-    out[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                   [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                   [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    out[:3, :3] = rotation_matrix((x / size, y / size, z / size, w / size))
     out[:3, 3] = p
     return out
 

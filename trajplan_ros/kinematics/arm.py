@@ -38,16 +38,18 @@ def _vector(name: str, values: Sequence[float], n: int) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class ToolJacobian:
     """
-    Tool position p and axis u, their first derivatives and the joint axes, in the base frame.
+    Tool position p and axes, their first derivatives and the joint axes, in the base frame.
 
-    Per planned joint i: dp/dq_i = Z_i x (p - o_i), du/dq_i = Z_i x u and the signed joint axis
-    Z_i (axis of joint i times its sign).
+    Per planned joint i: dp/dq_i = Z_i x (p - o_i), du/dq_i = Z_i x u (each axis alike) and
+    the signed joint axis Z_i (axis of joint i times its sign).
 
-    ``rows`` is (2 + 3 planned, N, 3) as ``forward.walk_chain`` gives them: p, u, then per
-    planned joint i dp/dq_i, du/dq_i and Z_i at rows 2 + 3i, 3 + 3i and 4 + 3i.
+    ``rows`` is (V + (V + 1) planned, N, 3) as ``forward.walk_chain`` gives them: the point,
+    the tool axis u (and a second axis w for a full orientation: V = ``vectors`` = 3), then per
+    planned joint i the derivatives of each and Z_i (``forward.column``).
     """
 
     rows: np.ndarray
+    vectors: int = 2
 
     @property
     def p(self) -> np.ndarray:
@@ -62,22 +64,35 @@ class ToolJacobian:
     @property
     def jp(self) -> np.ndarray:
         """dp/dq, (N, 3, planned)."""
-        return self.rows[2::3].transpose(1, 2, 0)
+        return self._columns(0)
 
     @property
     def ju(self) -> np.ndarray:
         """du/dq, (N, 3, planned)."""
-        return self.rows[3::3].transpose(1, 2, 0)
+        return self._columns(1)
+
+    @property
+    def axes(self) -> np.ndarray:
+        """The signed joint axes Z_i, (N, 3, planned)."""
+        return self._columns(self.vectors)
+
+    def jacobians(self) -> list[np.ndarray]:
+        """Return dp/dq, du/dq and (with a second axis) dw/dq, each (N, 3, planned)."""
+        return [self._columns(t) for t in range(self.vectors)]
+
+    def _columns(self, row: int) -> np.ndarray:
+        v = self.vectors
+        return self.rows[v + row::v + 1].transpose(1, 2, 0)
 
     def hessian(self) -> np.ndarray:
         """
-        Return the second derivatives of p and u by every pair of planned joints.
+        Return the second derivatives of p and the axes by every pair of planned joints.
 
-        (N, planned, planned, 2, 3): [k, i, j, 0] = d2p/dq_i dq_j, [k, i, j, 1] = d2u/dq_i dq_j
+        (N, planned, planned, V, 3): [k, i, j, 0] = d2p/dq_i dq_j, [k, i, j, 1] = d2u/dq_i dq_j
         (``forward.chain_hessian``, compiled). Along joint directions n the second derivative
         d2/dt2 p(q + t n) is n^T H n.
         """
-        return chain_hessian(self.rows)
+        return chain_hessian(self.rows, self.vectors)
 
 
 def _rot_x(angle: float) -> np.ndarray:
@@ -396,17 +411,19 @@ class ArmModel:
         q = np.asarray(q, dtype=float)
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
 
-    def held_tail(self, q: np.ndarray) -> np.ndarray:
+    def held_tail(self, q: np.ndarray, tool: np.ndarray | None = None) -> np.ndarray:
         """
-        Return the tool point and axis (2, 3) in frame ``planned``, the held joints at q.
+        Return the tool point and axes (V, 3) in frame ``planned``, the held joints at q.
 
-        q holds every joint's angle (n_joints,).
+        q holds every joint's angle (n_joints,); ``tool`` (V, 3): the point and axes in the tip
+        frame (default ``tool_point`` and ``tool_axis``).
 
         Pass it as ``tail`` to ``tool`` and ``tool_jacobian`` to walk the planned joints only.
         """
         q = np.ascontiguousarray(q, dtype=float)[None, :]
+        tool = self._chain.tail if tool is None else np.ascontiguousarray(tool, dtype=float)
         return walk_chain(q, self.sign, self.offset, self.rotations, self.translations,
-                          self._kinds, self.n_joints, self.planned, self._chain.tail, self.planned,
+                          self._kinds, self.n_joints, self.planned, tool, self.planned,
                           False)[:, 0]
 
     def tool(self, q: np.ndarray, tail: np.ndarray | None = None
@@ -425,7 +442,8 @@ class ArmModel:
 
         ``tail`` as for ``tool``.
         """
-        return ToolJacobian(self._walk(np.asarray(q, dtype=float), tail, jacobian=True))
+        rows = self._walk(np.asarray(q, dtype=float), tail, jacobian=True)
+        return ToolJacobian(rows, 2 if tail is None else len(tail))
 
     def chain(self, tail: np.ndarray | None = None) -> Chain:
         """

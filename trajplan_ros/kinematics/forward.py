@@ -5,10 +5,11 @@ The compiled forward kinematics of a serial chain (eq. 1-2), its Jacobian and it
 
 ``walk_chain`` walks the joints from the tip towards the base for each configuration: per joint
 i it applies v <- Rz(theta_i) (L_i rotation v + L_i translation) to the tool point and only
-the rotation to the tool axis, with theta_i = sign_i q_i + offset_i. With the Jacobian, the
-columns of joint i are born in its own frame, after its turn, as z x (tool point), z x (tool
-axis) and z itself, each times sign_i, and are then turned with everything else. A link
-rotation is applied by its kind: none, about x only (every DH link: alpha_i), or in general.
+the rotation to the tool's axes (the tool axis u, and for a full orientation a second axis w
+across it), with theta_i = sign_i q_i + offset_i. With the Jacobian, the columns of joint i
+are born in its own frame, after its turn, as z x (tool point), z x (each axis) and z itself,
+each times sign_i, and are then turned with everything else. A link rotation is applied by its
+kind: none, about x only (every DH link: alpha_i), or in general.
 
 ``tool_rows`` walks a ``Chain`` (an arm's arrays as the kernels take them) and turns the result
 into the base frame B.
@@ -22,12 +23,24 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 
-__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'Chain', 'chain_hessian', 'tool_rows', 'walk_chain']
+__all__ = ['IDENTITY', 'ABOUT_X', 'GENERAL', 'Chain', 'chain_hessian', 'column', 'tool_rows',
+           'walk_chain']
 
 #: How a link rotation is applied: skipped, as a rotation about x, or as a 3x3 product.
 IDENTITY, ABOUT_X, GENERAL = 0, 1, 2
+
+
+@inlined_kernel
+def column(vectors: int, joint: int, row: int) -> int:
+    """
+    Return the row of ``walk_chain``'s Jacobian that holds d(vector ``row``)/dq_``joint``.
+
+    ``row`` 0 is the tool point, 1 .. V - 1 the axes, V the signed joint axis Z_joint; V =
+    ``vectors``.
+    """
+    return vectors + (vectors + 1) * joint + row
 
 
 @kernel
@@ -37,20 +50,20 @@ def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: n
     """
     Walk joints top-1 .. bottom from frame ``top`` to frame ``bottom`` (eq. 1-2).
 
-    q (N, >= top) holds the joint angles, columns bottom..top-1 used; ``tail`` (2, 3) is the
-    tool point and axis in frame ``top``. Returns (rows, N, 3): row 0 the tool point, row 1 the
-    tool axis and, with ``jacobian``, rows 2 + 3i, 3 + 3i and 4 + 3i the derivatives of point
-    and axis by q_i and sign_i times joint i's axis, for each joint i < ``planned``.
+    q (N, >= top) holds the joint angles, columns bottom..top-1 used; ``tail`` (V, 3) is the
+    tool point and its V - 1 axes in frame ``top``. Returns (rows, N, 3): rows 0 .. V - 1 the
+    tool point and axes and, with ``jacobian``, rows V + (V + 1) i + t, t < V, the derivatives
+    of each by q_i and row V + (V + 1) i + V sign_i times joint i's axis, for each joint
+    i < ``planned`` (``column``).
     """
-    n = q.shape[0]
-    rows = 2 + 3 * planned if jacobian else 2
+    n, vectors = q.shape[0], tail.shape[0]
+    rows = vectors + (vectors + 1) * planned if jacobian else vectors
     out = np.zeros((rows, n, 3))
     v = np.empty((rows, 3))
     for k in range(n):
         v[:] = 0.0
-        v[0, :] = tail[0]
-        v[1, :] = tail[1]
-        live = 2                                  # rows born so far: point, axis, then columns
+        v[:vectors] = tail
+        live = vectors                            # rows born so far: point, axes, then columns
         for i in range(top - 1, bottom - 1, -1):
             r = rotations[i]
             if kinds[i] == ABOUT_X:               # y, z turned by alpha_i: (cos, sin) = r[1:, 1]
@@ -74,15 +87,15 @@ def walk_chain(q: np.ndarray, sign: np.ndarray, offset: np.ndarray, rotations: n
                 x, y = v[m, 0], v[m, 1]
                 v[m, 0] = x * c - y * s
                 v[m, 1] = x * s + y * c
-            if jacobian and i < planned:          # z x p, z x u and z, times sign_i
-                col = 2 + 3 * i
-                for m in range(2):
+            if jacobian and i < planned:          # z x p, z x each axis and z, times sign_i
+                col = column(vectors, i, 0)
+                for m in range(vectors):
                     v[col + m, 0] = -sign[i] * v[m, 1]
                     v[col + m, 1] = sign[i] * v[m, 0]
                     v[col + m, 2] = 0.0
-                v[col + 2, 0] = 0.0
-                v[col + 2, 1] = 0.0
-                v[col + 2, 2] = sign[i]
+                v[col + vectors, 0] = 0.0
+                v[col + vectors, 1] = 0.0
+                v[col + vectors, 2] = sign[i]
                 live = rows
         out[:, k, :] = v
     return out
@@ -96,7 +109,7 @@ class Chain(NamedTuple):
     rotations: np.ndarray       # (n, 3, 3) the link rotations
     translations: np.ndarray    # (n, 3) the link translations
     kinds: np.ndarray           # (n,) how each rotation is applied: IDENTITY, ABOUT_X, GENERAL
-    tail: np.ndarray            # (2, 3) the tool point and axis in frame ``top``
+    tail: np.ndarray            # (V, 3) the tool point and its V - 1 axes in frame ``top``
     base: np.ndarray            # (4, 4) B, the first joint's frame in the base frame
     top: int                    # the joints walked: 0 .. top - 1
     planned: int                # the joints with Jacobian columns: 0 .. planned - 1
@@ -124,24 +137,25 @@ def tool_rows(chain: Chain, q: np.ndarray, jacobian: bool) -> np.ndarray:
 
 
 @kernel
-def chain_hessian(rows: np.ndarray) -> np.ndarray:
+def chain_hessian(rows: np.ndarray, vectors: int) -> np.ndarray:
     """
-    Return the second derivatives of the tool point p and axis u by every pair of joints.
+    Return the second derivatives of the tool point p and axes by every pair of joints.
 
-    ``rows`` (2 + 3 planned, N, 3): ``walk_chain``'s with the Jacobian (dp/dq_i, du/dq_i and
-    the signed joint axis Z_i at rows 2 + 3i, 3 + 3i, 4 + 3i). Returns (N, planned, planned, 2,
-    3): [k, i, j, 0] = d2p/dq_i dq_j and [k, i, j, 1] = d2u/dq_i dq_j, both Z_i x (dp/dq_j,
-    du/dq_j) for i <= j, symmetric.
+    ``rows`` (V + (V + 1) planned, N, 3): ``walk_chain``'s with the Jacobian, V = ``vectors``
+    (the columns and the signed joint axes Z_i at ``column``). Returns (N, planned, planned,
+    V, 3): [k, i, j, t] = d2 v_t/dq_i dq_j of vector t (0 the point, then the axes), Z_i x
+    dv_t/dq_j for i <= j, symmetric.
     """
-    planned, n = (rows.shape[0] - 2) // 3, rows.shape[1]
-    out = np.empty((n, planned, planned, 2, 3))
+    planned, n = (rows.shape[0] - vectors) // (vectors + 1), rows.shape[1]
+    out = np.empty((n, planned, planned, vectors, 3))
     for k in range(n):
         for i in range(planned):
-            zx, zy, zz = rows[4 + 3 * i, k, 0], rows[4 + 3 * i, k, 1], rows[4 + 3 * i, k, 2]
+            axis = column(vectors, i, vectors)
+            zx, zy, zz = rows[axis, k, 0], rows[axis, k, 1], rows[axis, k, 2]
             for j in range(i, planned):
-                for t in range(2):
-                    x, y, z = rows[2 + 3 * j + t, k, 0], rows[2 + 3 * j + t, k, 1], \
-                        rows[2 + 3 * j + t, k, 2]
+                for t in range(vectors):
+                    at = column(vectors, j, t)
+                    x, y, z = rows[at, k, 0], rows[at, k, 1], rows[at, k, 2]
                     out[k, i, j, t, 0] = out[k, j, i, t, 0] = zy * z - zz * y
                     out[k, i, j, t, 1] = out[k, j, i, t, 1] = zz * x - zx * z
                     out[k, i, j, t, 2] = out[k, j, i, t, 2] = zx * y - zy * x

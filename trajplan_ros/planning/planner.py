@@ -30,6 +30,7 @@ from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.jit import warm_up, Warmup
+from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import TimeLaw
@@ -68,6 +69,7 @@ class PlanResult:
     joint_goal: np.ndarray | None = None
     position_error_m: float = float('nan')
     axis_error_rad: float = float('nan')          # angle of the tool axis to its target
+    orientation_error_rad: float = float('nan')   # pose mode: angle of the rotation to the goal
     motion_time_s: float = float('nan')
     efficiency: float = float('nan')
     iterations: int = 0
@@ -139,6 +141,7 @@ class PlanResult:
             'joint_goal': None if self.joint_goal is None else [float(v) for v in self.joint_goal],
             'position_error_m': num(self.position_error_m),
             'axis_error_rad': num(self.axis_error_rad),
+            'orientation_error_rad': num(self.orientation_error_rad),
             'motion_time_s': num(self.motion_time_s),
             'efficiency': num(self.efficiency),
             'iterations': self.iterations,
@@ -182,7 +185,7 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
         start = r.start if r.start is not None else np.zeros(arm.n_joints)    # upright: q = 0
         obj = Objective(arm, r.goal, start, mode=r.mode, omega=r.angular_velocity,
                         shaping=r.shaping, profile=r.motion, approach=r.approach,
-                        start_margin=r.start_limit_margin)
+                        orientation=r.orientation, start_margin=r.start_limit_margin)
         _check_world(r.world, obj.goal)
         common.update(joint_names=tuple(arm.joint_names),
                       law=r.motion.time_law(arm, r.angular_velocity))
@@ -215,9 +218,9 @@ def _search(obj: Objective, r: PlanRequest,
     one = obj.in_plane()
     if one is not None:
         found = search(one)
-        p, u = one.tool(found.x[None])
-        if (found.interrupted is not None or (np.linalg.norm(p[0] - obj.goal) <= r.tolerance
-                                              and one.axis_angle(u)[0] <= r.axis_limit)):
+        tool = one.tool(found.x[None])
+        if (found.interrupted is not None or (np.linalg.norm(tool[0, 0] - obj.goal) <= r.tolerance
+                                              and one.axis_angle(tool[1])[0] <= r.axis_limit)):
             return one, found
     return obj, search(obj)
 
@@ -297,7 +300,8 @@ def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float, axis_err
     """
     Return the status of a search and its one-line reason.
 
-    ``axis_err``: the tool axis's angle from ``target`` (its name), NaN in free mode.
+    ``axis_err``: the angle the mode holds (``Objective.angle_errors``) from ``target`` (its
+    name): the tool axis's, or a pose's rotation; NaN in free mode.
     """
     if found.interrupted == PlanStatus.TIMED_OUT:
         return PlanStatus.TIMED_OUT, (f'planning ran past max_planning_time '
@@ -305,15 +309,19 @@ def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float, axis_err
                                       f'{pos_err:.3g} m')
     if found.interrupted == PlanStatus.CANCELLED:
         return PlanStatus.CANCELLED, 'planning stopped before the end'
+    what, name = (('orientation', 'orientation_tolerance') if limits.mode is Mode.POSE
+                  else ('axis', 'axis_tolerance'))
     axis = ('' if np.isnan(axis_err) else
-            f", axis {describe_residual(axis_err, 'rad')} from {target}")
+            f", {what} {describe_residual(axis_err, 'rad')} from {target}")
     if pos_err > limits.tolerance:
         return PlanStatus.NOT_REACHED, (f'goal not reached: best position error {pos_err:.3g} m '
                                         f'is above the tolerance {limits.tolerance:.3g} m{axis}')
-    if axis_err > limits.axis_limit:
+    if axis_err > limits.angle_limit:
+        best, kind = (('orientation', 'pose') if limits.mode is Mode.POSE
+                      else ('tool axis', f'{limits.mode.value} pose'))
         return PlanStatus.NOT_REACHED, (
-            f'no {limits.mode.value} pose found: the best tool axis is {axis_err:.3g} rad from '
-            f'{target} (axis_tolerance {limits.axis_limit:.3g} rad), position error '
+            f'no {kind} found: the best {best} is {axis_err:.3g} rad from '
+            f'{target} ({name} {limits.angle_limit:.3g} rad), position error '
             f'{pos_err:.3g} m')
     return (PlanStatus.SUCCEEDED,
             f'reached in {found.motion_time:.4f} s of motion, error '
@@ -324,13 +332,16 @@ def _outcome(obj: Objective, found: OptimizeResult, request: PlanRequest, clock:
              common: dict[str, Any]) -> PlanResult:
     """Return the result of a search: the joint goal, its errors, the status and a message."""
     joint_goal = obj.full(found.x)[0]
-    p, u = obj.arm.tool(joint_goal[None, :])
-    pos_err = float(np.linalg.norm(p[0] - obj.goal))
-    axis_err = float(obj.axis_angle(u)[0]) if obj.holds_axis else float('nan')
-    status, message = _status(found, request, pos_err, axis_err, obj.target_name)
+    tool = obj.tool(found.x[None])
+    pos_err = float(np.linalg.norm(tool[0, 0] - obj.goal))
+    axis_err = float(obj.axis_angle(tool[1])[0]) if obj.holds_axis else float('nan')
+    turn_err = float(obj.angle_errors(tool)[0]) if obj.mode is Mode.POSE else float('nan')
+    status, message = _status(found, request, pos_err,
+                              turn_err if obj.mode is Mode.POSE else axis_err, obj.target_name)
     return PlanResult(
         status, message, start=obj.start.copy(), joint_goal=joint_goal, position_error_m=pos_err,
-        axis_error_rad=axis_err, motion_time_s=found.motion_time, efficiency=found.fun,
+        axis_error_rad=axis_err, orientation_error_rad=turn_err,
+        motion_time_s=found.motion_time, efficiency=found.fun,
         iterations=found.nit, evaluations=found.nfev, plan_time_s=time.perf_counter() - clock,
         history_efficiency=found.history_fun, history_error=found.history_error, **common)
 
@@ -360,16 +371,19 @@ def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
     Where that means compiling, ``announce`` is told so first, with about how long it takes.
 
     The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
-    the paper's arm once in each mode, then once among a box (the collision check), and a
-    made-up six-joint arm once in free mode (a kernel's machine code serves every arm; the six
-    joints reach the polish's SQP step).
+    the paper's arm once in each mode of a point goal, then once among a box (the collision
+    check), and a made-up six-joint arm once in free mode and once to a pose (a kernel's
+    machine code serves every arm; the six joints reach the polish's SQP step).
     """
     def plans() -> None:
-        for mode in Mode:
+        for mode in (Mode.FREE, Mode.RADIAL, Mode.APPROACH):
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
         plan(_WARM_UP_GOAL, seed=0, world=_warm_up_world())
         arm = _six_joint_arm()
-        plan(arm.tool(np.full((1, 6), 0.4))[0][0], arm=arm, mode=Mode.FREE, seed=0)
+        frame = arm.frames(np.full((1, 6), 0.4))[0, -1]
+        plan(frame[:3, 3], arm=arm, mode=Mode.FREE, seed=0)
+        plan(frame[:3, 3], arm=arm, mode=Mode.POSE, orientation=quaternions(frame[None, :3, :3])[0],
+             seed=0)
 
     return warm_up(plans, announce)
 

@@ -7,7 +7,8 @@ The goal and start, the arm, the mode, the motion's profile and the collision wo
 search's settings (algorithm, swarm size, iteration cap, convergence precision, seed, fuzzy
 shaping, optimiser options); the limits on its work (``max_planning_time``). The names are the
 node's parameters and the ``trajplan plan`` flags: ``angular_velocity`` (``--angular-velocity``),
-``max_iterations``, ``tolerance``, ``axis_tolerance``, ``max_planning_time``.
+``max_iterations``, ``tolerance``, ``axis_tolerance``, ``orientation_tolerance``,
+``max_planning_time``.
 
 ``validate`` refuses settings with a one-line reason (ValueError); a goal or start the arm
 cannot take is not a settings error: ``plan`` answers it REJECTED, with the reason.
@@ -31,8 +32,8 @@ from trajplan_ros.search.iepso import iepso
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN, unit_direction
 from trajplan_ros.search.optimize import OptimizeResult
 
-__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
-           'RENAMED']
+__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_ORIENTATION_TOLERANCE',
+           'DEFAULT_TOLERANCE', 'PlanRequest', 'RENAMED']
 
 #: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
 ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
@@ -44,6 +45,9 @@ DEFAULT_TOLERANCE = 1e-6
 #: goal ray of the paper's radial mode is met exactly; an approach direction within 1 mrad,
 #: as a small arm's URDF axes, off by micro-radians, often cannot point exactly along it.
 DEFAULT_AXIS_TOLERANCE = MappingProxyType({Mode.RADIAL.value: 1e-6, Mode.APPROACH.value: 1e-3})
+#: Largest angle (rad) of the rotation between a pose's goal orientation and the reached one
+#: that counts as met: a six- or seven-joint arm meets a pose exactly.
+DEFAULT_ORIENTATION_TOLERANCE = 1e-6
 #: Earlier keyword names of ``plan`` -> the request's names (the old ones keep working).
 RENAMED = MappingProxyType({'omega': 'angular_velocity', 'max_iter': 'max_iterations',
                             'tol': 'convergence_precision', 'profile': 'motion',
@@ -67,9 +71,12 @@ class PlanRequest:
     :param start: all joint angles now (rad); None: the upright pose q = 0.
     :param arm: the arm model; None: the paper's arm.
     :param mode: "free" (position only), "radial" (eq. 12-13: the tool axis along the goal
-        ray, pointing outward, too) or "approach" (the tool axis along ``approach``).
+        ray, pointing outward, too), "approach" (the tool axis along ``approach``) or "pose"
+        (the tool frame's whole orientation is ``orientation``).
     :param approach: approach mode: the direction the tool axis points along (base frame; need
         not be a unit vector); the default (0, 0, -1) is a grasp from above.
+    :param orientation: pose mode: the tool (tip) frame's orientation in the base frame, a
+        unit quaternion (x, y, z, w).
     :param motion: the motion's profile, timing and limits; the plan minimises its duration.
     :param angular_velocity: the servo angular velocity omega of eq. (10), rad/s; it caps every
         joint's velocity.
@@ -78,6 +85,8 @@ class PlanRequest:
     :param tolerance: largest position error (m) that counts as reached.
     :param axis_tolerance: radial and approach modes: largest angle (rad) of the tool axis to
         the goal ray or the approach direction; None: the mode's ``DEFAULT_AXIS_TOLERANCE``.
+    :param orientation_tolerance: pose mode: largest angle (rad) of the rotation between the
+        goal orientation and the reached one.
     :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
     :param population: swarm (or population) size.
     :param max_iterations: iteration cap.
@@ -97,11 +106,13 @@ class PlanRequest:
     arm: ArmModel | None = None
     mode: Mode | str = Mode.FREE
     approach: Sequence[float] = TOP_DOWN
+    orientation: Sequence[float] | None = None
     motion: MotionProfile = field(default_factory=MotionProfile)
     angular_velocity: float = DEFAULT_OMEGA
     world: CollisionWorld | None = None
     tolerance: float = DEFAULT_TOLERANCE
     axis_tolerance: float | None = None
+    orientation_tolerance: float = DEFAULT_ORIENTATION_TOLERANCE
     algorithm: str = 'iepso'
     population: int = 40
     max_iterations: int = 1000
@@ -122,6 +133,9 @@ class PlanRequest:
                              f'got {self.mode!r}')
         object.__setattr__(self, 'mode', Mode(self.mode))
         object.__setattr__(self, 'approach', tuple(float(v) for v in np.ravel(self.approach)))
+        if self.orientation is not None:
+            object.__setattr__(self, 'orientation',
+                               tuple(float(v) for v in np.ravel(self.orientation)))
 
     @classmethod
     def from_keywords(cls, goal: Sequence[float], start: Sequence[float] | None = None,
@@ -156,6 +170,11 @@ class PlanRequest:
         return self.arm if self.arm is not None else _paper_arm()
 
     @property
+    def angle_limit(self) -> float:
+        """Return the largest angle error that counts as met: the pose's, or ``axis_limit``."""
+        return self.orientation_tolerance if self.mode is Mode.POSE else self.axis_limit
+
+    @property
     def axis_limit(self) -> float:
         """Return the axis tolerance in force: ``axis_tolerance``, or the mode's default."""
         if self.axis_tolerance is not None:
@@ -172,7 +191,8 @@ class PlanRequest:
             raise ValueError(f'unknown algorithm {self.algorithm!r}; choose from '
                              f"{', '.join(ALGORITHMS)}")
         positive = {'angular_velocity': self.angular_velocity, 'tolerance': self.tolerance,
-                    'axis_tolerance': self.axis_limit}
+                    'axis_tolerance': self.axis_limit,
+                    'orientation_tolerance': self.orientation_tolerance}
         if self.max_planning_time is not None:
             positive['max_planning_time'] = self.max_planning_time
         for name, value in positive.items():

@@ -11,34 +11,11 @@ import numpy as np
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.planning import Trajectory
 
 
-__all__ = ['path_msg', 'quaternions', 'trajectory_msg']
-
-
-def quaternions(rot: np.ndarray) -> np.ndarray:
-    """
-    Convert rotation matrices (N, 3, 3) to unit quaternions, (N, 4) as x, y, z, w.
-
-    Builds K = 4 q q^T (q = (w, x, y, z)) from the matrix entries and takes the row of its
-    largest diagonal entry, which is well conditioned for every rotation.
-    """
-    m00, m11, m22 = rot[:, 0, 0], rot[:, 1, 1], rot[:, 2, 2]
-    wx, wy, wz = (rot[:, 2, 1] - rot[:, 1, 2], rot[:, 0, 2] - rot[:, 2, 0],
-                  rot[:, 1, 0] - rot[:, 0, 1])
-    xy, xz, yz = (rot[:, 0, 1] + rot[:, 1, 0], rot[:, 0, 2] + rot[:, 2, 0],
-                  rot[:, 1, 2] + rot[:, 2, 1])
-    k = np.stack([
-        np.stack([1 + m00 + m11 + m22, wx, wy, wz], axis=-1),
-        np.stack([wx, 1 + m00 - m11 - m22, xy, xz], axis=-1),
-        np.stack([wy, xy, 1 - m00 + m11 - m22, yz], axis=-1),
-        np.stack([wz, xz, yz, 1 - m00 - m11 + m22], axis=-1)], axis=1)
-    rows = np.arange(rot.shape[0])
-    best = np.argmax(np.diagonal(k, axis1=1, axis2=2), axis=1)
-    q = k[rows, best] / (2.0 * np.sqrt(k[rows, best, best]))[:, None]
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)          # w >= 0: one of the two equal quaternions
-    return q[:, [1, 2, 3, 0]]
+__all__ = ['path_msg', 'trajectory_msg']
 
 
 def trajectory_msg(traj: Trajectory) -> JointTrajectory:

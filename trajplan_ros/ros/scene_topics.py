@@ -25,6 +25,7 @@ from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Obstacle, pose_matrix, Scene
 from trajplan_ros.collision.shapes import Shape
+from trajplan_ros.kinematics.rotations import quaternions
 from visualization_msgs.msg import Marker, MarkerArray
 
 if TYPE_CHECKING:
@@ -88,27 +89,9 @@ def _obstacle(marker: Marker, ident: str, base_frame: str) -> Obstacle:
     return Obstacle(ident, shape)
 
 
-def _quaternion(r: np.ndarray) -> tuple[float, float, float, float]:
-    """Return the unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method)."""
-    trace = float(np.trace(r))
-    i = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
-    if i == 0:
-        w = 0.5 * np.sqrt(1.0 + trace)
-        q = ((r[2, 1] - r[1, 2]) / (4 * w), (r[0, 2] - r[2, 0]) / (4 * w),
-             (r[1, 0] - r[0, 1]) / (4 * w), w)
-    else:
-        a, b, c = (i - 1, i % 3, (i + 1) % 3)
-        v = np.empty(3)
-        v[a] = 0.5 * np.sqrt(1.0 + 2 * r[a, a] - trace)
-        v[b] = (r[b, a] + r[a, b]) / (4 * v[a])
-        v[c] = (r[c, a] + r[a, c]) / (4 * v[a])
-        q = (*v, (r[c, b] - r[b, c]) / (4 * v[a]))
-    return tuple(float(x) for x in q)
-
-
 def _pose(matrix: np.ndarray) -> Pose:
     """Return a 4x4 transform as a Pose."""
-    x, y, z, w = _quaternion(matrix[:3, :3])
+    x, y, z, w = (float(v) for v in quaternions(matrix[None, :3, :3])[0])
     t = matrix[:3, 3]
     return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])),
                 orientation=Quaternion(x=x, y=y, z=z, w=w))

@@ -65,7 +65,7 @@ def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> n
     drawn = rng.uniform(obj.lower, obj.upper, (SAMPLES, obj.arm.planned))
     projected = project_onto_goal(obj, drawn)
     x = np.vstack((projected, polish(obj, projected)))
-    x = x[obj.errors(*obj.tool(x)) <= tolerance]
+    x = x[obj.errors(obj.tool(x)) <= tolerance]
     x = x[np.argsort(obj.motion_time(x), kind='stable')]
     _, first = np.unique(np.round(x / SAME_GOAL), axis=0, return_index=True)
     return x[np.sort(first)]
@@ -160,7 +160,7 @@ def _bisect(obj: Objective, check, free: tuple[np.ndarray, Clearance], blocked: 
         if _time(obj, x) > (1.0 - GAIN) * best_time:
             low = middle
             continue
-        clearance = check(x) if obj.errors(*obj.tool(x[None]))[0] <= tolerance else None
+        clearance = check(x) if obj.errors(obj.tool(x[None]))[0] <= tolerance else None
         spent += clearance is not None
         if clearance is not None and clearance.free:
             low = middle

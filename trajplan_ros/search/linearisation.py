@@ -3,8 +3,8 @@
 """
 The polish's constraints linearised, and its exact line minimax along the solutions, compiled.
 
-``linearise`` linearises the constraints c(x) = 0 (reach, and the axis in radial mode: the
-residuals p - goal and the tool axis's components across the goal ray, ``Objective.residuals``)
+``linearise`` linearises the constraints c(x) = 0 (reach, and with the axis held: the
+residuals p - goal and the tool axes' components across their targets, ``Objective.residuals``)
 at K candidates x, from the forward kinematics' first and second derivatives. With J the
 Jacobian of c by the planned joints it returns:
 
@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from trajplan_ros.kinematics.forward import column
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.motion.time_law import joint_time, TimeLaw
 
@@ -134,24 +135,33 @@ def residuals_and_jacobians(walk: np.ndarray, goal: np.ndarray, across: np.ndarr
     """
     Return the residuals c (K, 3 + h) and their Jacobians J (K, 3 + h, planned).
 
-    The residuals p - goal and the components of u along the rows of ``across`` (h, 3); the
-    Jacobian's columns dp/dq_i and ``across`` du/dq_i, from ``walk`` (see ``linearise``).
+    The residuals p - goal and, per row r of ``across`` (h, V - 1, 3), sum_t across[r, t] . a_t
+    over the tool's axes a_t (u, then w); the Jacobian's columns dp/dq_i and the same sums of
+    da_t/dq_i, from ``walk`` (V vectors; see ``linearise``).
     """
-    count, held, dim = walk.shape[1], across.shape[0], (walk.shape[0] - 2) // 3
+    vectors = across.shape[1] + 1
+    count, held = walk.shape[1], across.shape[0]
+    dim = (walk.shape[0] - vectors) // (vectors + 1)
     c, jac = np.empty((count, 3 + held)), np.empty((count, 3 + held, dim))
     for k in range(count):
         for a in range(3):
             c[k, a] = walk[0, k, a] - goal[a]
         for h in range(held):
-            c[k, 3 + h] = (across[h, 0] * walk[1, k, 0] + across[h, 1] * walk[1, k, 1]
-                           + across[h, 2] * walk[1, k, 2])
+            total = 0.0
+            for t in range(1, vectors):
+                for e in range(3):
+                    total += across[h, t - 1, e] * walk[t, k, e]
+            c[k, 3 + h] = total
         for i in range(dim):
             for a in range(3):
-                jac[k, a, i] = walk[2 + 3 * i, k, a]
+                jac[k, a, i] = walk[column(vectors, i, 0), k, a]
             for h in range(held):
-                jac[k, 3 + h, i] = (across[h, 0] * walk[3 + 3 * i, k, 0]
-                                    + across[h, 1] * walk[3 + 3 * i, k, 1]
-                                    + across[h, 2] * walk[3 + 3 * i, k, 2])
+                total = 0.0
+                for t in range(1, vectors):
+                    row = column(vectors, i, t)
+                    for e in range(3):
+                        total += across[h, t - 1, e] * walk[row, k, e]
+                jac[k, 3 + h, i] = total
     return c, jac
 
 
@@ -240,36 +250,39 @@ def solutions_curvatures(hessian: np.ndarray, null: np.ndarray, pinv: np.ndarray
     """
     Return Q (K, k, k, dim): Q_ab = -J^+ c''_ab / 2, c''_ab = n_a^T (d2c/dq2) n_b.
 
-    ``hessian`` (K, dim, dim, 2, 3): the second derivatives of p and u, which the residuals
-    map as ``residuals_and_jacobians`` does; ``null`` (K, k, dim): the null directions n_a.
+    ``hessian`` (K, dim, dim, V, 3): the second derivatives of p and the axes, which the
+    residuals map as ``residuals_and_jacobians`` does; ``null`` (K, k, dim): the null
+    directions n_a.
     """
     count, nulls, dim = null.shape
-    held, rows = across.shape[0], pinv.shape[2]
+    held, rows, vectors = across.shape[0], pinv.shape[2], hessian.shape[3]
     quad = np.zeros((count, nulls, nulls, dim))
-    turn, second = np.empty((nulls, dim, 2, 3)), np.empty(rows)   # the Hessian times each n_b
+    turn = np.empty((nulls, dim, vectors, 3))       # the Hessian times each n_b
+    second, bent = np.empty(rows), np.empty((vectors, 3))
     for k in range(count):
         turn[:] = 0.0
         for b in range(nulls):
             for i in range(dim):
                 for j in range(dim):
                     weight_j = null[k, b, j]
-                    for t in range(2):
+                    for t in range(vectors):
                         for e in range(3):
                             turn[b, i, t, e] += hessian[k, i, j, t, e] * weight_j
         for a in range(nulls):
             for b in range(a, nulls):
+                for t in range(vectors):             # n_a^T H n_b of the point and each axis
+                    for e in range(3):
+                        total = 0.0
+                        for i in range(dim):
+                            total += null[k, a, i] * turn[b, i, t, e]
+                        bent[t, e] = total
                 for e in range(3):
-                    total = 0.0
-                    for i in range(dim):
-                        total += null[k, a, i] * turn[b, i, 0, e]
-                    second[e] = total
+                    second[e] = bent[0, e]
                 for h in range(held):
                     total = 0.0
-                    for e in range(3):
-                        du = 0.0
-                        for i in range(dim):
-                            du += null[k, a, i] * turn[b, i, 1, e]
-                        total += across[h, e] * du
+                    for t in range(1, vectors):
+                        for e in range(3):
+                            total += across[h, t - 1, e] * bent[t, e]
                     second[3 + h] = total
                 for i in range(dim):
                     total = 0.0
@@ -288,14 +301,14 @@ def linearise(walk: np.ndarray, hessian: np.ndarray, x: np.ndarray, start: np.nd
     """
     Return c, R, the merit, J^+, N and Q at candidates x (K, planned) (see the module).
 
-    ``walk`` (2 + 3 planned, K, 3): p, u and per joint dp/dq_i, du/dq_i, Z_i, and ``hessian``
-    (K, planned, planned, 2, 3), as ``ToolJacobian`` gives them (the Hessian only with null
-    directions); ``start``: per planned joint; ``law``: the joints' time laws; ``across`` (h,
-    3): the components of the tool axis held (h = 0 in free mode); ``travel_weight`` and
-    ``weight`` (W): the merit's weights of the travel and of |c|; ``nulls``: the null
-    directions wanted (0, or the planned joints less the 3 + h residuals). Returns c (K,
-    3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, nulls, planned) and Q (K, nulls,
-    nulls, planned).
+    ``walk`` (V + (V + 1) planned, K, 3): p, the axes and per joint their derivatives and Z_i,
+    and ``hessian`` (K, planned, planned, V, 3), as ``ToolJacobian`` gives them (the Hessian
+    only with null directions); ``start``: per planned joint; ``law``: the joints' time laws;
+    ``across`` (h, V - 1, 3): the components of the axes held (h = 0 in free mode);
+    ``travel_weight`` and ``weight`` (W): the merit's weights of the travel and of |c|;
+    ``nulls``: the null directions wanted (0, or the planned joints less the 3 + h residuals).
+    Returns c (K, 3 + h), R (K,), merit (K,), J^+ (K, planned, 3 + h), N (K, nulls, planned)
+    and Q (K, nulls, nulls, planned).
     """
     count, dim = x.shape
     c, jac = residuals_and_jacobians(walk, goal, across)

@@ -20,13 +20,18 @@ in the paper) holds the tool axis along a fixed direction d of the base frame in
 goal ray, e.g. d = (0, 0, -1) for a grasp from above; the rotation about the axis stays free.
 Both modes hold one target direction, the axis target (``axis_target``): every formula below
 is the same for either. The axis error is the angle between u_tool and the target (``axis_angle``;
-a tool pointing the other way is an error of pi). With the axis held, the error fed to S
+a tool pointing the other way is an error of pi). Mode "pose" (not in the paper either) holds
+the tool frame's whole orientation, a rotation R_goal of the base frame: the tool axis along
+R_goal u0 and a second tool axis w (across u, ``second_axis``) along R_goal w0, u0 and w0 being
+the two in the tip frame. Its angle error is the angle of the rotation between the goal's and
+the reached orientation (``orientation_angle``). With the axis held, the error fed to S
 combines both, err = sqrt(|p - goal|^2 + (L angle)^2), with L the arm's reach turning radians
 into metres.
 
 The local polish needs the constraints as smooth residuals: the position residual p - goal and,
 with the axis held, the two components of u_tool across the target (``residuals``), which vanish
-at u_tool = +-target; the angle tells the two apart.
+at u_tool = +-target; the angle tells the two apart. A pose adds w's component along
+R_goal (u0 x w0), which with u on its target vanishes at w = +-R_goal w0.
 """
 from __future__ import annotations
 
@@ -38,13 +43,15 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel, ToolJacobian
 from trajplan_ros.kinematics.forward import Chain, tool_rows
-from trajplan_ros.kinematics.jit import kernel
+from trajplan_ros.kinematics.jit import inlined_kernel, kernel
+from trajplan_ros.kinematics.rotations import rotation_matrix, unit_quaternion
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'TOP_DOWN',
-           'direction_basis', 'errors_eq11', 'unit_direction']
+           'direction_basis', 'errors_eq11', 'planned_arm', 'second_axis', 'tool_angle', 'tool_angles',
+           'unit_direction']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -59,6 +66,7 @@ class Mode(str, Enum):
     FREE = 'free'
     RADIAL = 'radial'
     APPROACH = 'approach'
+    POSE = 'pose'
 
 
 #: The approach direction of a grasp from above (base frame).
@@ -89,6 +97,17 @@ def unit_direction(direction: np.ndarray | Sequence[float]) -> np.ndarray:
     return d / np.linalg.norm(d)
 
 
+def second_axis(tool_axis: np.ndarray) -> np.ndarray:
+    """
+    Return the tool's second axis w0 (tip frame), across the tool axis u0, for a full pose.
+
+    The tip frame's x axis made perpendicular to u0 (its y axis where u0 is along x): for the
+    default u0 = z, w0 = x, and (u0, w0) fix the tip frame's orientation.
+    """
+    u = np.asarray(tool_axis, dtype=float) / np.linalg.norm(tool_axis)
+    return direction_basis(u, np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1])[1]
+
+
 def direction_basis(direction: np.ndarray, hint: np.ndarray | None = None) -> np.ndarray:
     """
     Return the unit direction d / |d| and two unit vectors across it, as the rows of a 3x3 matrix.
@@ -106,12 +125,25 @@ def direction_basis(direction: np.ndarray, hint: np.ndarray | None = None) -> np
     return np.array([[x, y, z], [a, b, 0.0], [-z * b, z * a, x * b - y * a]])
 
 
+def planned_arm(arm: ArmModel, mode: Mode | str) -> ArmModel:
+    """
+    Return ``arm`` as a plan in ``mode`` moves it.
+
+    Trailing joints that cannot move the tool point (nor, with the axis held, the tool axis),
+    such as a wrist roll about the tool axis, keep their start angle, as moving them could only
+    add time (``ArmModel.without_idle_tail``). A pose needs every joint.
+    """
+    mode = Mode(mode)
+    return arm if mode is Mode.POSE else arm.without_idle_tail(mode is not Mode.FREE)
+
+
 class Problem(NamedTuple):
     """The kernels' view of an ``Objective``: its arrays, as one argument."""
 
     chain: Chain            # the planned joints' chain, the held ones at their start
     goal: np.ndarray        # (3,) m
-    across: np.ndarray      # (h, 3) the tool axis's components held at zero (``across_basis``)
+    across: np.ndarray      # (h, V - 1, 3) the tool axes' components held at zero
+    #                         (``across_basis``)
     ray: np.ndarray         # (3, 3) the axis target and two vectors across it (``ray_basis``)
     reach: float            # m, L of the error (``errors_eq11``)
     start: np.ndarray       # (m,) the planned joints' start angles
@@ -121,30 +153,68 @@ class Problem(NamedTuple):
     upper: np.ndarray       # (m,)
 
 
+@inlined_kernel
+def tool_angle(tool: np.ndarray, ray: np.ndarray, held: int) -> float:
+    """
+    Return the angle error (rad) of one tool (V, 3): its point, axis u and second axis w.
+
+    ``ray``: the axis target and two unit vectors across it (rows); ``held``: how many
+    components the constraints hold (``Objective.across_basis``). 3 (a pose): the angle of the
+    rotation from the goal's tool frame (ray[0], ray[1], ray[2] = u0, w0, u0 x w0 turned by
+    R_goal) to the reached one (u, w, u x w), atan2(|sum g x a| / 2, (sum g . a - 1) / 2);
+    2: the angle between u and ray[0]; 1: u's angle from the plane that ray[1] leaves; 0: 0.
+    """
+    u = tool[1]
+    along = u[0] * ray[0, 0] + u[1] * ray[0, 1] + u[2] * ray[0, 2]
+    side = u[0] * ray[1, 0] + u[1] * ray[1, 1] + u[2] * ray[1, 2]
+    up = u[0] * ray[2, 0] + u[1] * ray[2, 1] + u[2] * ray[2, 2]
+    if held == 1:
+        return np.arcsin(min(abs(side), 1.0))
+    if held == 2:
+        return np.arctan2(np.hypot(side, up), along)
+    if held < 3:
+        return 0.0
+    w = tool[2]
+    v = np.empty((3, 3))                      # the reached frame: u, w, u x w
+    v[0], v[1] = u, w
+    v[2, 0] = u[1] * w[2] - u[2] * w[1]
+    v[2, 1] = u[2] * w[0] - u[0] * w[2]
+    v[2, 2] = u[0] * w[1] - u[1] * w[0]
+    cosine, sx, sy, sz = -1.0, 0.0, 0.0, 0.0
+    for t in range(3):
+        g, a = ray[t], v[t]
+        cosine += g[0] * a[0] + g[1] * a[1] + g[2] * a[2]
+        sx += g[1] * a[2] - g[2] * a[1]
+        sy += g[2] * a[0] - g[0] * a[2]
+        sz += g[0] * a[1] - g[1] * a[0]
+    return np.arctan2(0.5 * np.sqrt(sx * sx + sy * sy + sz * sz), 0.5 * cosine)
+
+
 @kernel
-def errors_eq11(p: np.ndarray, u: np.ndarray, goal: np.ndarray, ray: np.ndarray, held: int,
+def tool_angles(rows: np.ndarray, ray: np.ndarray, held: int) -> np.ndarray:
+    """Return ``tool_angle`` at each of the tools ``rows`` (V, N, 3)."""
+    out = np.empty(rows.shape[1])
+    for k in range(rows.shape[1]):
+        out[k] = tool_angle(rows[:, k], ray, held)
+    return out
+
+
+@kernel
+def errors_eq11(rows: np.ndarray, goal: np.ndarray, ray: np.ndarray, held: int,
                 reach: float) -> np.ndarray:
     """
-    Return the error of eq. (11) at tool points p and axes u (N, 3), plus the axis's.
+    Return the error of eq. (11) at the tools ``rows`` (V, N, 3), plus the angle's.
 
-    ``ray``: the axis target (the goal ray in radial mode) and two unit vectors across it
-    (rows); ``held``: how many of those
-    the constraints hold (``Objective.across_basis``). With both, the error adds (L angle)^2,
-    the angle between u and the ray; with one, (L asin |u . across|)^2, u's angle from the
-    plane that leaves it; L = ``reach``.
+    ``rows``: the tool points, axes u and (a pose) second axes w, as ``forward.tool_rows``
+    gives them. The error adds (L angle)^2 to the squared position error, with the angle of
+    ``tool_angle`` (``ray``, ``held``) and L = ``reach``.
     """
-    out = np.empty(p.shape[0])
-    for k in range(p.shape[0]):
+    out = np.empty(rows.shape[1])
+    for k in range(rows.shape[1]):
         sq = 0.0
         for a in range(3):
-            sq += (p[k, a] - goal[a]) ** 2
-        along = u[k, 0] * ray[0, 0] + u[k, 1] * ray[0, 1] + u[k, 2] * ray[0, 2]
-        side = u[k, 0] * ray[1, 0] + u[k, 1] * ray[1, 1] + u[k, 2] * ray[1, 2]
-        up = u[k, 0] * ray[2, 0] + u[k, 1] * ray[2, 1] + u[k, 2] * ray[2, 2]
-        if held == 2:
-            sq += (reach * np.arctan2(np.hypot(side, up), along)) ** 2
-        elif held == 1:
-            sq += (reach * np.arcsin(min(abs(side), 1.0))) ** 2
+            sq += (rows[0, k, a] - goal[a]) ** 2
+        sq += (reach * tool_angle(rows[:, k], ray, held)) ** 2
         out[k] = np.sqrt(sq)
     return out
 
@@ -153,9 +223,11 @@ class Objective:
     """
     F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary).
 
-    ``across`` (radial and approach modes): how many components of the tool axis across the
-    axis target the constraints hold at zero; 2, the axis on it, but for ``solution_curve``'s
-    curves. ``approach``: the approach mode's direction d (base frame; default ``TOP_DOWN``).
+    ``across`` (modes but free): how many orientation residuals the constraints hold at zero:
+    the tool axis's two components across the axis target, then (a pose) the second axis's;
+    all of them (None: 2, or 3 for a pose), but for ``solution_curve``'s curves. ``approach``: the
+    approach mode's direction d (base frame; default ``TOP_DOWN``). ``orientation``: the pose
+    mode's tool orientation, a unit quaternion (x, y, z, w) in the base frame.
     ``start_margin``: how far (rad) a start joint may lie outside its limits (``start_notes``).
     ``profile``: the motion's profile and limits (default the paper's servo law); a profile
     that needs a limit no source gives raises ValueError.
@@ -163,15 +235,16 @@ class Objective:
 
     def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
                  mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
-                 shaping: RewardPunishment | None = None, across: int = 2,
+                 shaping: RewardPunishment | None = None, across: int | None = None,
                  profile: MotionProfile | None = None,
                  approach: np.ndarray | tuple[float, ...] = TOP_DOWN,
+                 orientation: np.ndarray | tuple[float, ...] | None = None,
                  start_margin: float = 0.0) -> None:
         self.arm = arm
         self.mode = Mode(mode)
         self.approach = unit_direction(approach)
-        if type(across) is not int or not 0 <= across <= 2:
-            raise ValueError(f'across must be 0, 1 or 2, got {across!r}')
+        self.orientation = self._check_orientation(orientation, self.mode)
+        across = self._check_across(across, self.mode)
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f'angular velocity must be finite and positive, got {omega}')
         self.omega = float(omega)
@@ -182,10 +255,8 @@ class Objective:
         self.start_margin = float(start_margin)
         #: The full start, and one line per joint outside its limits within ``start_margin``.
         self.start, self.start_notes = self._check_start(arm, start, self.start_margin)
-        #: The arm as planned: trailing joints that cannot move the tool point (nor, with the
-        #: axis held, the tool axis), such as a wrist roll about the tool axis, keep their start
-        #: angle, as moving them could only add time.
-        self.arm = arm = arm.without_idle_tail(self.holds_axis)
+        #: The arm as planned (``planned_arm``).
+        self.arm = arm = planned_arm(arm, self.mode)
         m = arm.planned
         #: The planned joints' start angles.
         self.planned_start = self.start[:m]
@@ -204,12 +275,13 @@ class Objective:
         self.longest_time = float(motion_times(self.law, self.upper[None, :], self.lower)[0])
         #: Rows: the axis target, then two unit vectors across it (``_target_basis``).
         self.ray_basis = self._target_basis()
-        #: Rows: the components of the tool axis across the target that the residuals hold at
-        #: zero (with the axis held: both, unless ``across`` is less; none in free mode). With
-        #: fewer than both, the solutions are the larger sets that ``solution_curve`` follows.
-        self.across_basis = (self.ray_basis[1: 1 + across] if self.holds_axis
-                             else np.empty((0, 3)))
-        self._tail = arm.held_tail(self.start)
+        #: (h, V - 1, 3): per orientation residual, what it takes of u (and w) (``residuals``).
+        #: With fewer than all, the solutions are the larger sets ``solution_curve`` follows.
+        self.across_basis = self._across_basis(across)
+        #: The tool in the tip frame: point, axis u0 and, for a pose, the second axis w0.
+        self.tool_frame = np.array([arm.tool_point, arm.tool_axis] + (
+            [second_axis(arm.tool_axis)] if self.mode is Mode.POSE else []))
+        self._tail = arm.held_tail(self.start, self.tool_frame)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
         self._across = across
@@ -234,6 +306,7 @@ class Objective:
                                               omega=self.omega, shaping=self.shaping,
                                               across=across, profile=self.profile,
                                               approach=self.approach,
+                                              orientation=self.orientation,
                                               start_margin=self.start_margin)
         return self._holding[across]
 
@@ -260,9 +333,10 @@ class Objective:
         meet the tool axis at one pose by chance; a roll's does at every pose).
         """
         poses = np.stack((self.planned_start, self.planned_start + 0.5))
-        rows = self.tool_jacobian(poses).rows
-        z = rows[4::3] / np.linalg.norm(rows[4::3], axis=2, keepdims=True)   # (planned, 2, 3)
-        roll = np.all(np.linalg.norm(np.cross(z, rows[1]), axis=2) <= PARALLEL, axis=1)
+        d = self.tool_jacobian(poses)
+        z = d.axes.transpose(2, 0, 1)
+        z = z / np.linalg.norm(z, axis=2, keepdims=True)                     # (planned, 2, 3)
+        roll = np.all(np.linalg.norm(np.cross(z, d.u), axis=2) <= PARALLEL, axis=1)
         pitch = [i for i in range(1, self.arm.planned) if not roll[i]]
         return all(np.all(np.linalg.norm(np.cross(z[i], z[pitch[0]]), axis=1) <= PARALLEL)
                    for i in pitch)
@@ -274,31 +348,70 @@ class Objective:
 
     @property
     def holds_axis(self) -> bool:
-        """Return True when the tool axis is held too (radial and approach modes)."""
+        """Return True when the tool axis is held too (every mode but free)."""
         return self.mode is not Mode.FREE
 
     @property
     def axis_target(self) -> np.ndarray:
-        """Return the direction the tool axis must point along: the goal ray, or ``approach``."""
-        return self.approach if self.mode is Mode.APPROACH else self.goal
+        """Return the direction the tool axis must point along (not defined in free mode)."""
+        return self.ray_basis[0]
 
     @property
     def target_name(self) -> str:
         """Return the axis target in words, for messages."""
-        return 'the approach direction' if self.mode is Mode.APPROACH else 'the goal ray'
+        return {Mode.APPROACH: 'the approach direction',
+                Mode.POSE: 'the goal orientation'}.get(self.mode, 'the goal ray')
 
     def _target_basis(self) -> np.ndarray:
         """
         Return the axis target and two unit vectors across it (rows; identity in free mode).
 
         In approach mode the first across lies in the vertical plane through the goal where it
-        can: the component that the pitch joints of a pan-and-pitch arm turn.
+        can: the component that the pitch joints of a pan-and-pitch arm turn. For a pose they
+        are the goal's tool frame: R_goal (u0, w0, u0 x w0).
         """
+        if self.mode is Mode.POSE:
+            u0, w0 = self.arm.tool_axis, second_axis(self.arm.tool_axis)
+            return np.stack((u0, w0, np.cross(u0, w0))) @ rotation_matrix(self.orientation).T
         if not self.holds_axis:
             return np.eye(3)
-        hint = (None if self.mode is Mode.RADIAL else
-                np.cross(self.approach, (-self.goal[1], self.goal[0], 0.0)))
-        return direction_basis(self.axis_target, hint)
+        if self.mode is Mode.RADIAL:
+            return direction_basis(self.goal)
+        return direction_basis(self.approach,
+                               np.cross(self.approach, (-self.goal[1], self.goal[0], 0.0)))
+
+    def _across_basis(self, across: int) -> np.ndarray:
+        """Return ``across_basis`` holding ``across`` residuals of the orientation."""
+        if not self.holds_axis:
+            return np.empty((0, 1, 3))
+        ray = self.ray_basis
+        if self.mode is not Mode.POSE:
+            return np.ascontiguousarray(ray[1: 1 + across, None, :])
+        rows = np.zeros((3, 2, 3))
+        rows[0, 0], rows[1, 0], rows[2, 1] = ray[1], ray[2], ray[2]
+        return rows[:across]
+
+    @staticmethod
+    def _check_across(across: int | None, mode: Mode) -> int:
+        """Return how many orientation residuals to hold: ``across``, or all of the mode's."""
+        held = 3 if mode is Mode.POSE else 2
+        across = held if across is None else across
+        if type(across) is not int or not 0 <= across <= held:
+            raise ValueError(f'across must be 0 to {held}, got {across!r}')
+        return across
+
+    @staticmethod
+    def _check_orientation(orientation: np.ndarray | Sequence[float] | None,
+                           mode: Mode) -> np.ndarray | None:
+        """Return a pose's orientation as a unit quaternion; InvalidRequest for a bad one."""
+        if mode is not Mode.POSE:
+            return None
+        if orientation is None:
+            raise InvalidRequest('pose mode needs an orientation (a quaternion x, y, z, w)')
+        try:
+            return unit_quaternion(orientation)
+        except ValueError as exc:
+            raise InvalidRequest(str(exc)) from None
 
     @staticmethod
     def _search_box(lower: np.ndarray, upper: np.ndarray,
@@ -363,32 +476,39 @@ class Objective:
         q[:, : self.arm.planned] = x
         return q
 
-    def tool(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return tool position and axis (N, 3) for planned-joint vectors x (N, planned)."""
-        rows = tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), False)
-        return rows[0], rows[1]
+    def tool(self, x: np.ndarray) -> np.ndarray:
+        """
+        Return the tools (V, N, 3) at planned-joint vectors x (N, planned).
+
+        Rows: the tool position p, the tool axis u and, for a pose, the second axis w.
+        """
+        return tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), False)
 
     def tool_jacobian(self, x: np.ndarray) -> ToolJacobian:
         """Return ``ArmModel.tool_jacobian`` for planned-joint vectors x (N, planned)."""
-        return ToolJacobian(tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), True))
+        return ToolJacobian(tool_rows(self.chain, np.ascontiguousarray(x, dtype=float), True),
+                            len(self.tool_frame))
 
-    def residuals(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def residuals(self, tool: np.ndarray) -> np.ndarray:
         """
-        Return the constraint residuals, (N, 3 + the ``across`` components held; 3 in free mode).
+        Return the constraint residuals at ``tool`` (V, N, 3), (N, 3 + the ``across`` held).
 
         They are p - goal and, with the axis held, the components of u across the axis target
-        (zero where u = +-target, with both held; see the module docstring).
+        (zero where u = +-target, with both held; see the module docstring), then a pose's w
+        along R_goal (u0 x w0).
         """
-        return self.linear_residuals(p - self.goal, u)
+        return self.linear_residuals(tool[0] - self.goal, *tool[1:])
 
-    def linear_residuals(self, dp: np.ndarray, du: np.ndarray) -> np.ndarray:
+    def linear_residuals(self, dp: np.ndarray, *daxes: np.ndarray) -> np.ndarray:
         """
-        Return the change of the residuals for changes dp, du (..., N, 3) of the tool p and u.
+        Return the change of the residuals for changes dp, du[, dw] (..., N, 3) of the tool.
 
-        The residuals are linear in p and u, so this also maps their derivatives.
+        The residuals are linear in p and the axes, so this also maps their derivatives.
         """
-        return (np.concatenate((dp, du @ self.across_basis.T), axis=-1) if self.holds_axis
-                else dp)
+        if not self.holds_axis:
+            return dp
+        turn = sum(d @ self.across_basis[:, t].T for t, d in enumerate(daxes))
+        return np.concatenate((dp, turn), axis=-1)
 
     def axis_angle(self, u: np.ndarray) -> np.ndarray:
         """Return the angle (rad) between each tool axis u (N, 3) and the axis target."""
@@ -396,15 +516,27 @@ class Objective:
         across = np.linalg.norm(u @ self.ray_basis[1:].T, axis=1)
         return np.arctan2(across, along)
 
-    def errors(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def angle_errors(self, tool: np.ndarray) -> np.ndarray:
         """
-        Return the error of eq. (11), plus the axis angle with the axis held (see the module).
+        Return the angle (rad) the mode holds at ``tool`` (V, N, 3) (``tool_angle``).
 
-        With one component held across the target (``across``), the angle of u from the plane
-        that leaves it; with none, the position error alone.
+        The tool axis's angle to its target (radial, approach), or the angle of the rotation
+        from the goal orientation (pose); NaN in free mode.
         """
-        return errors_eq11(np.ascontiguousarray(p), np.ascontiguousarray(u), self.goal,
-                           self.ray_basis, len(self.across_basis), self.arm.reach)
+        if not self.holds_axis:
+            return np.full(tool.shape[1], np.nan)
+        return tool_angles(np.ascontiguousarray(tool), self.ray_basis,
+                           3 if self.mode is Mode.POSE else 2)
+
+    def errors(self, tool: np.ndarray) -> np.ndarray:
+        """
+        Return the error of eq. (11) at ``tool`` (V, N, 3), plus the angle's (see the module).
+
+        With fewer components held (``across``), the angle of ``tool_angle``; with none, the
+        position error alone.
+        """
+        return errors_eq11(np.ascontiguousarray(tool), self.goal, self.ray_basis,
+                           len(self.across_basis), self.arm.reach)
 
     def motion_time(self, x: np.ndarray) -> np.ndarray:
         """Return R of eq. (10), max_i t_i(|x_i - start_i|), for x (N, planned)."""
@@ -427,9 +559,8 @@ def efficiency_eq9(problem: Problem, x: np.ndarray, shaping: Shaping, longest_ti
     fraction of ``longest_time``, the longest motion the limits allow (0 on an arm whose
     planned joints cannot move).
     """
-    rows = tool_rows(problem.chain, x, False)
-    err = errors_eq11(rows[0], rows[1], problem.goal, problem.ray, problem.across.shape[0],
-                      problem.reach)
+    err = errors_eq11(tool_rows(problem.chain, x, False), problem.goal, problem.ray,
+                      problem.across.shape[0], problem.reach)
     r = motion_times(problem.law, x, problem.start)
     tau = r / longest_time if longest_time > 0.0 else np.zeros_like(r)
     return r + shaping_eq9(err, tau, shaping), r, err

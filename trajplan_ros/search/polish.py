@@ -229,12 +229,13 @@ def linearise_at(problem: Problem, x: np.ndarray, weight: float, nulls: int) -> 
     ``nulls``: the null directions wanted (0: a Newton step is all that is needed).
     """
     walk = tool_rows(problem.chain, x, True)
-    dim = x.shape[1]
-    hessian = chain_hessian(walk) if nulls else np.empty((0, dim, dim, 2, 3))
+    dim, vectors = x.shape[1], problem.chain.tail.shape[0]
+    hessian = (chain_hessian(walk, vectors) if nulls
+               else np.empty((0, dim, dim, vectors, 3)))
     c, time, merit, pinv, null, quad = linearise(
         walk, hessian, x, problem.start, problem.law, problem.omega, problem.goal,
         problem.across, TRAVEL_WEIGHT, weight, nulls)
-    error = errors_eq11(walk[0], walk[1], problem.goal, problem.ray, problem.across.shape[0],
+    error = errors_eq11(walk, problem.goal, problem.ray, problem.across.shape[0],
                         problem.reach)
     return Linearisation(c, time, merit, pinv, null, quad, error)
 
@@ -383,7 +384,7 @@ def settle(obj: Objective, x: np.ndarray, below: float, steps: int = 3) -> np.nd
     there settle on the solution.
     """
     x = np.clip(np.array(x, dtype=float, ndmin=2), obj.lower, obj.upper)
-    error = obj.errors(*obj.tool(x))
+    error = obj.errors(obj.tool(x))
     near = (error > below) & (error < 1e-2 * obj.arm.reach)
     if not near.any():
         return x

@@ -24,10 +24,10 @@ them all:
    also sampled ten times as finely near it: two minima can lie closer together than a step
    (near the edge of the workspace, where the curves are small and sharply bent).
 
-Where radial solutions are isolated (four or five planned joints) the curve is that of the
-position and of fewer conditions on the tool axis (none, or one of its two components across the
-goal ray: ``curve_constraint``), and the seeds are where the tool axis comes nearest the goal ray
-instead. Every radial solution lies on those curves, and a curve's basin is larger than an
+Where the solutions are isolated (radial or approach goals on four or five planned joints, poses
+on six) the curve is that of the position and of fewer conditions on the orientation (none, one
+or two of them: ``curve_constraint``), and the seeds are where the tool comes nearest the goal
+orientation instead. Every solution lies on those curves, and a curve's basin is larger than an
 isolated solution's.
 """
 from __future__ import annotations
@@ -41,7 +41,7 @@ from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.motion.time_law import joint_time, TimeLaw
 from trajplan_ros.search.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
                                                residuals_and_jacobians, solution_model)
-from trajplan_ros.search.objective import errors_eq11, Objective, Problem
+from trajplan_ros.search.objective import errors_eq11, Objective, Problem, tool_angle
 
 __all__ = ['curve_constraint', 'curve_keys', 'curve_seeds', 'distinct', 'distinct_by_spacing',
            'follow', 'limit_crossings', 'lowest_time', 'neighbours', 'newton_steps',
@@ -54,15 +54,16 @@ def curve_constraint(obj: Objective) -> Objective | None:
     Return the objective whose solutions form the curve to search, or None when there is none.
 
     That is obj itself where its constraints leave one free direction (free mode with four
-    planned joints, radial with six). In radial mode with four or five planned joints, where
-    the solutions are isolated points, it holds the position and only as many components of
-    the tool axis across the goal ray as leave one free direction (none, or one): the points
-    lie on its curves, where the axis comes nearest the goal ray.
+    planned joints, radial with six, a pose with seven). Where the solutions are isolated
+    points with the axis held (radial or approach with four or five planned joints, a pose
+    with four to six), it holds the position and only as many orientation residuals as leave
+    one free direction: the points lie on its curves, where the tool comes nearest the goal
+    orientation.
     """
     planned = obj.arm.planned
     if obj.null_directions == 1:
         return obj
-    if obj.holds_axis and planned in (4, 5):
+    if obj.null_directions == 0 and 0 <= planned - 4 < len(obj.across_basis):
         return obj.holding(planned - 4)
     return None
 
@@ -96,7 +97,8 @@ def _curve_model(curve: Problem, x: np.ndarray
     """Return c, J^+, the null direction and half the solutions' curvature along it at x."""
     rows = tool_rows(curve.chain, x, True)
     c, jac = residuals_and_jacobians(rows, curve.goal, curve.across)
-    pinv, null, quad = solution_model(jac, chain_hessian(rows), curve.across, 1)
+    pinv, null, quad = solution_model(jac, chain_hessian(rows, curve.chain.tail.shape[0]),
+                                      curve.across, 1)
     return c, pinv, null[:, 0, :], quad[:, 0, 0, :]
 
 
@@ -216,7 +218,7 @@ class _Walk(NamedTuple):
     samples: np.ndarray     # the samples of the walks, (K, S, planned)
     present: np.ndarray     # which points are on the curves at all (K, L): every sample, and
     #                         the crossing points that exist
-    axis: np.ndarray        # the tool axis at each point, (K L, 3)
+    tool: np.ndarray        # the tool at each point, (K L, V, 3): its point and axes
 
 
 def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.ndarray,
@@ -265,7 +267,7 @@ def snap_to_limits(along: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> N
 def points_on_curves(curve: Problem, along: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
-    Return ``_Walk``'s points, samples, present and axis for the samples ``along`` (K, S, m).
+    Return ``_Walk``'s points, samples, present and tool for the samples ``along`` (K, S, m).
 
     See ``_on_curves``; ``along`` is changed in place (samples snapped onto the limits).
     """
@@ -300,14 +302,14 @@ def points_on_curves(curve: Problem, along: np.ndarray
     for n in range(count_inside):
         flat[n] = points[inside[n] // size, inside[n] % size]
     rows = tool_rows(curve.chain, flat, False)
-    error = errors_eq11(rows[0], rows[1], curve.goal, curve.ray, curve.across.shape[0], reach)
-    axis = np.zeros((k * size, 3))
+    error = errors_eq11(rows, curve.goal, curve.ray, curve.across.shape[0], reach)
+    tool = np.zeros((k * size, rows.shape[0], 3))
     for n in range(count_inside):
         j = inside[n]
-        axis[j] = rows[1, n]
+        tool[j] = rows[:, n]
         if not error[n] <= 5e-2 * reach:
             points[j // size, j % size] = np.nan
-    return points, along, present, axis
+    return points, along, present, tool
 
 
 def curve_seeds(obj: Objective, probes: np.ndarray, best: np.ndarray | None, *,
@@ -422,15 +424,14 @@ def distinct(points: np.ndarray, radius: float) -> np.ndarray:
     return kept[keep]
 
 
-@inlined_kernel
-def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, law: TimeLaw,
-               omega: float, ray: np.ndarray, by_time: bool) -> np.ndarray:
+@kernel
+def curve_keys(points: np.ndarray, tool: np.ndarray, obj: Problem, by_time: bool) -> np.ndarray:
     """
     Return what the seeds minimise at the points (K, L, m) along the curves; inf at NaN ones.
 
-    ``by_time``: the motion time R (eq. 10), plus 1e-6 of the travel over omega (a tied
-    stretch has one minimum); else the angle between the tool ``axis`` (K L, 3) and the goal
-    ray (``ray[0]``).
+    ``by_time``: the motion time R (eq. 10) of ``obj``, plus 1e-6 of the travel over omega (a
+    tied stretch has one minimum); else the angle error of the ``tool`` (K L, V, 3) under
+    ``obj``'s constraints (``tool_angle``).
     """
     k, count, dim = points.shape
     key = np.full((k, count), np.inf)
@@ -441,16 +442,12 @@ def curve_keys(points: np.ndarray, axis: np.ndarray, start: np.ndarray, law: Tim
             if by_time:
                 largest, travel = 0.0, 0.0
                 for i in range(dim):
-                    moved = abs(points[r, j, i] - start[i])
-                    largest = max(largest, joint_time(law, i, moved))
+                    moved = abs(points[r, j, i] - obj.start[i])
+                    largest = max(largest, joint_time(obj.law, i, moved))
                     travel += moved
-                key[r, j] = largest + 1e-6 * travel / omega
+                key[r, j] = largest + 1e-6 * travel / obj.omega
             else:
-                u = axis[r * count + j]
-                along = u[0] * ray[0, 0] + u[1] * ray[0, 1] + u[2] * ray[0, 2]
-                side = u[0] * ray[1, 0] + u[1] * ray[1, 1] + u[2] * ray[1, 2]
-                up = u[0] * ray[2, 0] + u[1] * ray[2, 1] + u[2] * ray[2, 2]
-                key[r, j] = np.arctan2(np.hypot(side, up), along)
+                key[r, j] = tool_angle(tool[r * count + j], obj.ray, obj.across.shape[0])
     return key
 
 
@@ -484,17 +481,17 @@ def distinct_by_spacing(points: np.ndarray, key: np.ndarray, minima: np.ndarray,
 
 @kernel
 def seeds_on_curves(points: np.ndarray, samples: np.ndarray, present: np.ndarray,
-                    axis: np.ndarray, spacing: np.ndarray, obj: Problem, by_time: bool,
+                    tool: np.ndarray, spacing: np.ndarray, obj: Problem, by_time: bool,
                     best: np.ndarray) -> np.ndarray:
     """
     Return ``curve_seeds``'s seeds from the points along the curves (``_on_curves``).
 
-    ``obj``: the objective's arrays (its start, time law, omega and goal ray); ``by_time``: the
-    minima of the motion time (then of the travel), else of the tool axis's angle to the goal
-    ray; ``best``: the answer so far (NaN: none).
+    ``obj``: the objective's arrays (its start, time law, omega and targets); ``by_time``: the
+    minima of the motion time (then of the travel), else of the angle error (``curve_keys``);
+    ``best``: the answer so far (NaN: none).
     """
     k, count, dim = points.shape
-    key = curve_keys(points, axis, obj.start, obj.law, obj.omega, obj.ray, by_time)
+    key = curve_keys(points, tool, obj, by_time)
     before, after = neighbours(present)
     minima = np.zeros((k, count), dtype=np.bool_)
     for r in range(k):

@@ -26,7 +26,7 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
-from trajplan_ros.search.objective import Mode
+from trajplan_ros.search.objective import Mode, planned_arm
 from trajplan_ros.tools.bench.methods import Answer, Method
 
 __all__ = ['baseline_method']
@@ -113,7 +113,7 @@ class _Child:
         if answer['joints'] is None:
             raise ValueError(f"the baseline rejected goal {list(goal)}: {answer['message']}")
         joints = np.array(answer['joints'])
-        planned = arm.without_idle_tail(mode is not Mode.FREE).planned
+        planned = planned_arm(arm, mode).planned
         return Answer(joints[:planned], joints=joints, seconds=answer['seconds'])
 
 

@@ -99,11 +99,11 @@ def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
     rows, rank, idle = _moving_rows(obj)
 
     def residuals(z: np.ndarray) -> np.ndarray:
-        return rows @ obj.residuals(*obj.tool(z[None, :m]))[0]
+        return rows @ obj.residuals(obj.tool(z[None, :m]))[0]
 
     def jacobian(z: np.ndarray) -> np.ndarray:
         d = obj.tool_jacobian(z[None, :m])
-        jac = rows @ obj.linear_residuals(d.jp[0].T, d.ju[0].T).T   # (rows, m)
+        jac = rows @ obj.linear_residuals(*(j[0].T for j in d.jacobians())).T   # (rows, m)
         return np.hstack((jac, np.zeros((jac.shape[0], 1))))
 
     x = None
@@ -169,11 +169,11 @@ def _on_goal(obj: Objective, x: np.ndarray) -> np.ndarray | None:
     The axis, when held, within 1e-9 rad in radial mode, within ``axis_limit`` in approach.
     """
     x = np.clip(x, obj.lower, obj.upper)
-    p, u = obj.tool(x[None])
-    ok = np.linalg.norm(p[0] - obj.goal) <= 1e-9
+    tool = obj.tool(x[None])
+    ok = np.linalg.norm(tool[0, 0] - obj.goal) <= 1e-9
     if obj.holds_axis:
-        ok &= obj.axis_angle(u)[0] <= (axis_limit(obj.mode) if obj.mode is Mode.APPROACH
-                                       else 1e-9)
+        ok &= obj.angle_errors(tool)[0] <= (axis_limit(obj.mode) if obj.mode is Mode.APPROACH
+                                            else 1e-9)
     return x if ok else None
 
 
@@ -189,7 +189,7 @@ def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
     """
     x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (16, obj.lower.size))
     d = obj.tool_jacobian(x)
-    jac = obj.linear_residuals(np.swapaxes(d.jp, 1, 2), np.swapaxes(d.ju, 1, 2))  # (16, m, r)
+    jac = obj.linear_residuals(*(np.swapaxes(j, 1, 2) for j in d.jacobians()))  # (16, m, r)
     u, sv, _ = np.linalg.svd(np.concatenate(jac, axis=0).T, full_matrices=False)
     rank = int(np.max(np.linalg.matrix_rank(jac, tol=1e-9 * sv[0])))
     idle = np.all(np.abs(jac) <= 1e-9 * sv[0], axis=(0, 2))

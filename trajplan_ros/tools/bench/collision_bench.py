@@ -145,7 +145,7 @@ def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega
     rng = np.random.default_rng(12345)
     projected = project_onto_goal(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
-    x = x[obj.errors(*obj.tool(x)) <= 1e-6]
+    x = x[obj.errors(obj.tool(x)) <= 1e-6]
     limits = StartLimits.at(world, bench.start)
     for candidate in x[np.argsort(obj.motion_time(x), kind='stable')]:
         if check_motion(world, bench.start, obj.full(candidate)[0], law, Timing.INDEPENDENT,

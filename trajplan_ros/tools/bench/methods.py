@@ -29,7 +29,7 @@ from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import ALGORITHMS, plan, PlanResult
 from trajplan_ros.search.fuzzy import RewardPunishment
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.objective import Mode, Objective, planned_arm
 
 __all__ = ['Answer', 'Method', 'METHODS', 'ITERATIONS', 'PARTICLES', 'PYSWARMS_OPTIONS',
            'load', 'pyswarms_logging']
@@ -125,7 +125,7 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
                   shaping=shaping, optimizer_options=options, motion=profile)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
-    planned = arm.without_idle_tail(mode is not Mode.FREE).planned      # as the objective plans
+    planned = planned_arm(arm, mode).planned                             # as the objective plans
     return Answer(result.joint_goal[:planned], result)
 
 

@@ -79,11 +79,11 @@ def _score(res: Results, k: int, obj: Objective, answer: Answer, case: Case) -> 
     """Fill in row k of ``res`` for ``answer`` to ``case``, scored on ``obj``."""
     x = np.atleast_2d(answer.x)
     ev = obj(x)
-    p, u = obj.tool(x)
+    tool = obj.tool(x)
     res.x[k], res.plans[k] = answer.x, answer.plan
     res.efficiency[k], res.motion_time[k] = ev.efficiency[0], ev.motion_time[0]
-    res.error[k] = np.linalg.norm(p[0] - obj.goal)
-    res.axis_error[k] = obj.axis_angle(u)[0] if obj.holds_axis else 0.0
+    res.error[k] = np.linalg.norm(tool[0, 0] - obj.goal)
+    res.axis_error[k] = obj.angle_errors(tool)[0] if obj.holds_axis else 0.0
     exact = case.exact_time
     res.gap[k] = ev.motion_time[0] / exact - 1.0 if np.isfinite(exact) else np.nan
     res.claimed[k] = (answer.plan.success if answer.plan is not None
