@@ -35,10 +35,13 @@ def test_the_independent_fk_is_yourdfpys_and_agrees_with_ours() -> None:
     arm = ArmModel.from_urdf(so101.urdf, so101.base_link, so101.tip_link,
                              tool_offset=(0.0, 0.01, 0.02), tool_axis=(1.0, 0.0, 0.0))
     fk = IndependentFk(str(so101.urdf), arm)
+    frame = np.stack((arm.tool_point, arm.tool_axis, (0.0, 1.0, 0.0)))
     for q in np.random.default_rng(1).uniform(arm.lower, arm.upper, (10, 5)):
-        p, u = fk.tool(q)
+        p, u, w = fk.tool(q, frame)
         ours = arm.tool(q[None])
         assert np.allclose(p, ours[0][0], atol=1e-12) and np.allclose(u, ours[1][0], atol=1e-12)
+        tip = arm.frames(q[None])[0, -1]
+        assert np.allclose(w, tip[:3, 1], atol=1e-12)
 
 
 def test_the_independent_fk_follows_moves_below_its_scene_graphs_tolerance() -> None:
@@ -46,10 +49,11 @@ def test_the_independent_fk_follows_moves_below_its_scene_graphs_tolerance() -> 
     so101 = PUBLISHED['so101']
     arm = ArmModel.from_urdf(so101.urdf, so101.base_link, so101.tip_link)
     fk = IndependentFk(str(so101.urdf), arm)
+    frame = np.stack((arm.tool_point, arm.tool_axis))
     q = np.array([1.5, arm.lower[1], -1.4, -1.3, 1.6])
-    fk.tool(q)
+    fk.tool(q, frame)
     q[1] += 5e-9
-    assert np.linalg.norm(fk.tool(q)[0] - arm.tool(q[None])[0][0]) <= 1e-14
+    assert np.linalg.norm(fk.tool(q, frame)[0] - arm.tool(q[None])[0][0]) <= 1e-14
 
 
 def test_radial_goals_without_a_radial_pose_are_dropped() -> None:

@@ -214,6 +214,8 @@ class PlanRequest:
                              f'got {self.seed!r}')
         self._check_options()
         unit_direction(self.approach)
+        if self.orientation is not None and self.mode is not Mode.POSE:
+            raise ValueError(f'an orientation is for pose mode, not {self.mode.value}')
         arm = self.planned_arm
         if self.world is not None and self.world.arm.geometry.arm.joint_names != arm.joint_names:
             raise ValueError(f'the collision model is of joints '

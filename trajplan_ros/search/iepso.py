@@ -92,7 +92,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.search.objective import Evaluation, Objective
+from trajplan_ros.search.objective import Evaluation, Mode, Objective
 from trajplan_ros.search.optimize import (asked, History, initial_population, Interrupt,
                                           OptimizeResult)
 from trajplan_ros.search.polish import agreeing, EarlyStop, polish as polish_candidates, settle
@@ -121,6 +121,10 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 #: first steps try only the vertex sets of the SQP step (``polish``). The measurements behind
 #: these values: doc/benchmarks.md, "How the search's settings were chosen".
 WIDE_PROBES = 3
+#: How many times ``curve_search`` points the curve search of a pose follows curves through:
+#: the curves of the tool turning about its axis are long, and 20 walks of 17 rad missed the
+#: fastest of a UR5's eight solutions on 4 of 40 goals (40 walks: 1 of 40).
+POSE_CURVE_PROBES = 2
 SCREENED = 3
 SCREEN_ERROR = 1e-6
 WIDE_TRUST = 1.5
@@ -379,6 +383,7 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     answer). ``interrupt``, when it asks to stop, ends every polish at its next step and skips
     what would follow.
     """
+    probes *= POSE_CURVE_PROBES if obj.mode is Mode.POSE else 1
     if _by_multistart(obj):
         members = _round_members(swarm, rng, count)
         probed = _probes(obj, rng, probes * WIDE_PROBES)
@@ -450,6 +455,10 @@ def _by_multistart(obj: Objective) -> bool:
     """
     Return whether ``_multistart`` searches the solutions after the swarm phase (ours).
 
+    A pose: where its solutions form curves (seven planned joints). Isolated pose solutions
+    (six) lie on the curves of the tool turning about its axis, which the curve search
+    follows.
+
     Where the curve search does not serve alone: on isolated points in free mode (one to
     three planned joints), where a swarm lands on the fastest less surely than a multi-start
     Newton search from many probes; on sets of two or more dimensions (free mode on five to
@@ -460,6 +469,8 @@ def _by_multistart(obj: Objective) -> bool:
     which the curve search follows. Measurements: doc/benchmarks.md, "How the search's
     settings were chosen".
     """
+    if obj.mode is Mode.POSE:
+        return obj.null_directions >= 1
     if obj.holds_axis:
         return obj.arm.planned >= 6
     return obj.arm.planned != 4

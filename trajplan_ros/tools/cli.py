@@ -17,6 +17,7 @@ from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanRequest, PlanResult, PlanStatus, prepare)
+from trajplan_ros.planning.request import DEFAULT_ORIENTATION_TOLERANCE
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
@@ -36,17 +37,22 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument('xyz', nargs='*', type=finite_number, metavar='X Y Z',
                    help='goal position of the tool in metres (omit with --goals)')
     p.add_argument('--goals', metavar='FILE',
-                   help='CSV file, one goal a line: x,y,z[,ax,ay,az][,start angles]; a header '
-                        'line names the columns (x,y,z, ax,ay,az for an approach, then the '
-                        "joints by name, or any names for chain order); '-' for stdin")
+                   help='CSV file, one goal a line: x,y,z[,ax,ay,az | ,qx,qy,qz,qw][,start '
+                        'angles]; a header line names the columns (x,y,z, ax,ay,az for an '
+                        'approach or qx,qy,qz,qw for a pose, then the joints by name, or any '
+                        "names for chain order); '-' for stdin")
     p.add_argument('--start', nargs='+', type=finite_number, metavar='Q',
                    help='start joint angles in radians (default: upright, all zero)')
     p.add_argument('--mode', choices=[m.value for m in Mode],
-                   help='free (position only), radial (eq. 12-13) or approach (the tool axis '
-                        'along --approach); default approach with --approach, else free')
+                   help='free (position only), radial (eq. 12-13), approach (the tool axis '
+                        'along --approach) or pose (the tool frame at --orientation); default '
+                        'approach with --approach, pose with --orientation, else free')
     p.add_argument('--approach', nargs=3, type=finite_number, metavar=('AX', 'AY', 'AZ'),
                    help='approach direction of the tool axis in the base frame (default '
                         '0 0 -1: from above)')
+    p.add_argument('--orientation', nargs=4, type=finite_number,
+                   metavar=('QX', 'QY', 'QZ', 'QW'),
+                   help="the tool frame's orientation in the base frame, a unit quaternion")
     p.add_argument('--algorithm', choices=list(ALGORITHMS), default='iepso')
     p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
     p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
@@ -57,6 +63,10 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                         'approach direction that counts as met (default '
                         + ', '.join(f'{k} {v:g}' for k, v in DEFAULT_AXIS_TOLERANCE.items())
                         + ')')
+    p.add_argument('--orientation-tolerance', type=finite_number, metavar='RAD',
+                   default=DEFAULT_ORIENTATION_TOLERANCE,
+                   help='largest angle of the rotation between the goal orientation and the '
+                        'reached one that counts as met (default %(default)s)')
     p.add_argument('--start-limit-margin', type=finite_number, default=0.05, metavar='RAD',
                    help='a start joint this far outside its limits is planned from, the motion '
                         'bringing it inside (default %(default)s)')
@@ -122,11 +132,16 @@ def _is_number(text: str) -> bool:
 
 
 class Layout(NamedTuple):
-    """The columns of a goals CSV: after x, y, z an approach direction or not, then the start."""
+    """The columns of a goals CSV: after x, y, z an approach, an orientation or neither."""
 
-    approach: bool = False
+    #: The columns after x, y, z that say how the tool points: (), ax,ay,az or qx,qy,qz,qw.
+    pointing: tuple[str, ...] = ()
     #: The start columns' joint names in file order; None: the chain's order.
     joints: tuple[str, ...] | None = None
+
+
+#: The columns a goals CSV may give after x, y, z, and the mode each asks for.
+POINTING = {('ax', 'ay', 'az'): Mode.APPROACH, ('qx', 'qy', 'qz', 'qw'): Mode.POSE}
 
 
 def _layout(header: list[str], arm: ArmModel) -> Layout:
@@ -134,17 +149,14 @@ def _layout(header: list[str], arm: ArmModel) -> Layout:
     names = [c.lower() for c in header]
     if names[:3] != ['x', 'y', 'z']:
         raise UsageError(f"a header must start with x,y,z, got {','.join(header[:3])}")
-    if names[3:7] == ['qx', 'qy', 'qz', 'qw']:
-        raise UsageError('pose goals (qx,qy,qz,qw) are not planned yet; give ax,ay,az, an '
-                         'approach direction of the tool axis')
-    approach = names[3:6] == ['ax', 'ay', 'az']
-    rest = tuple(header[6 if approach else 3:])
+    pointing = next((p for p in POINTING if tuple(names[3:3 + len(p)]) == p), ())
+    rest = tuple(header[3 + len(pointing):])
     if not rest or not set(rest) <= set(arm.joint_names):
-        return Layout(approach)
+        return Layout(pointing)
     if sorted(rest) != sorted(arm.joint_names[:len(rest)]) or len(set(rest)) != len(rest):
         raise UsageError(f"the header's joints {', '.join(rest)} are not the arm's first "
                          f"{len(rest)} joints ({', '.join(arm.joint_names)})")
-    return Layout(approach, rest)
+    return Layout(pointing, rest)
 
 
 def _goal_lines(path: str, arm: ArmModel) -> tuple[Layout, list[tuple[int, list[str]]]]:
@@ -165,10 +177,10 @@ def _goal_lines(path: str, arm: ArmModel) -> tuple[Layout, list[tuple[int, list[
 
 
 def _parse_line(cells: list[str], layout: Layout, arm: ArmModel
-                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """Return a line's goal, approach direction (or None) and start (or None)."""
-    head = 6 if layout.approach else 3
-    expected = 'x,y,z' + (',ax,ay,az' if layout.approach else '') + '[,start angles]'
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Return a line's goal, its approach or orientation (or nothing) and start (or None)."""
+    head = 3 + len(layout.pointing)
+    expected = ','.join(('x', 'y', 'z') + layout.pointing) + '[,start angles]'
     if len(cells) < head:
         raise UsageError(f'expected {expected}, got {len(cells)} field(s)')
     if not all(cells):
@@ -184,7 +196,7 @@ def _parse_line(cells: list[str], layout: Layout, arm: ArmModel
             raise UsageError(f'expected {len(layout.joints)} start angles '
                              f"({', '.join(layout.joints)}), got {len(start)}")
         start = start[[layout.joints.index(j) for j in arm.joint_names[:len(start)]]]
-    return values[:3], values[3:6] if layout.approach else None, start
+    return values[:3], values[3:head], start
 
 
 def _human(result: PlanResult, arm: ArmModel) -> str:
@@ -195,8 +207,10 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
             f'{name}={v:+.6f}' for name, v in zip(arm.joint_names, result.joint_goal)))
         motion = result.motion
         law = '' if motion == MotionProfile() else f' ({motion.describe()})'
+        turn = ('' if np.isnan(result.orientation_error_rad) else
+                f", orientation error {describe_residual(result.orientation_error_rad, 'rad')}")
         lines.append(f'motion time {result.motion_time_s:.4f} s{law}, position error '
-                     f"{describe_residual(result.position_error_m, 'm')}, efficiency F "
+                     f"{describe_residual(result.position_error_m, 'm')}{turn}, efficiency F "
                      f'{result.efficiency:.4f}, '
                      f'{result.iterations} iterations, '
                      f'planned in {1e3 * result.plan_time_s:.1f} ms')
@@ -243,11 +257,15 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
 
 def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
     """Return the settings of ``trajplan plan``'s flags as a request (its goal still empty)."""
-    mode = args.mode or (Mode.APPROACH.value if args.approach else Mode.FREE.value)
-    if args.approach and mode != Mode.APPROACH.value:
-        raise UsageError(f'--approach needs --mode approach, not {mode}')
+    implied = (Mode.APPROACH.value if args.approach else
+               Mode.POSE.value if args.orientation else Mode.FREE.value)
+    mode = args.mode or implied
+    for flag, needs in (('approach', Mode.APPROACH.value), ('orientation', Mode.POSE.value)):
+        if getattr(args, flag) and mode != needs:
+            raise UsageError(f'--{flag} needs --mode {needs}, not {mode}')
     request = PlanRequest(
         (), arm=arm, mode=mode, approach=args.approach or TOP_DOWN,
+        orientation=args.orientation, orientation_tolerance=args.orientation_tolerance,
         motion=motion_from_arguments(args), angular_velocity=args.angular_velocity,
         world=world_from_arguments(args, arm), tolerance=args.tolerance,
         axis_tolerance=args.axis_tolerance, algorithm=args.algorithm, seed=args.seed,
@@ -287,11 +305,14 @@ def _run_plan(args: argparse.Namespace) -> int:
     failures = 0
     for number, cells in lines:
         try:
-            goal, approach, start = _parse_line(cells, layout, arm)
+            goal, pointing, start = _parse_line(cells, layout, arm)
             line_request = request.replace(goal=goal, start=args.start if start is None
                                            else start)
-            if approach is not None:
-                line_request = line_request.replace(mode=Mode.APPROACH, approach=approach)
+            if layout.pointing:
+                mode = POINTING[layout.pointing]
+                line_request = line_request.replace(
+                    mode=mode, **{'approach' if mode is Mode.APPROACH else 'orientation':
+                                  pointing})
                 line_request.validate()
         except (UsageError, ValueError) as exc:
             failures += 1

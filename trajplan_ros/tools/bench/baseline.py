@@ -11,7 +11,8 @@ process times its own rows (``time.perf_counter`` around the call, objective inc
 pipe between the two costs the row nothing (it plans once, untimed, for each arm first, as this
 process compiles or loads its kernels first). The arm goes to the child as its arrays, so that
 every version plans exactly this arm; only the API the versions share is used: ``ArmModel``'s
-constructor and ``plan(goal, start, arm=, mode=, seed=)``.
+constructor and ``plan(goal, start, arm=, mode=, seed=)`` (and ``orientation=`` for a pose,
+which only versions that plan poses take).
 """
 from __future__ import annotations
 
@@ -49,8 +50,9 @@ for line in sys.stdin:
         print(json.dumps({}), flush=True)
         continue
     clock = time.perf_counter()
+    pose = {'orientation': request['orientation']} if 'orientation' in request else {}
     result = plan(request['goal'], request['start'], arm=arm, mode=request['mode'],
-                  seed=request['seed'])
+                  seed=request['seed'], **pose)
     seconds = time.perf_counter() - clock
     joints = None if result.joint_goal is None else result.joint_goal.tolist()
     print(json.dumps({'joints': joints, 'seconds': seconds, 'message': result.message}),
@@ -97,7 +99,8 @@ class _Child:
         return json.loads(line)
 
     def solve(self, arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int, profile: MotionProfile) -> Answer:
+              seed: int, profile: MotionProfile, orientation: np.ndarray | None = None
+              ) -> Answer:
         """
         Plan ``goal`` from ``start`` in the child; the answer carries the child's time.
 
@@ -107,9 +110,12 @@ class _Child:
         if arm is not self._arm:
             self._ask({'arm': _arm_spec(arm)})
             self._arm = arm
-        answer = self._ask({'goal': np.asarray(goal, float).tolist(),
-                            'start': np.asarray(start, float).tolist(), 'mode': mode.value,
-                            'seed': int(seed)})
+        request = {'goal': np.asarray(goal, float).tolist(),
+                   'start': np.asarray(start, float).tolist(), 'mode': mode.value,
+                   'seed': int(seed)}
+        if orientation is not None:
+            request['orientation'] = np.asarray(orientation, float).tolist()
+        answer = self._ask(request)
         if answer['joints'] is None:
             raise ValueError(f"the baseline rejected goal {list(goal)}: {answer['message']}")
         joints = np.array(answer['joints'])

@@ -3,11 +3,13 @@
 """
 The benchmark on a URDF chain (``trajplan bench --urdf``): goals, a reference, peers, scores.
 
-Goals are the tool positions of seeded random in-limit configurations (continuous joints within
-pi of 0); starts are q = 0 clipped into the limits, or random in-limit configurations. These
+Goals are the tool positions (in pose mode the tool frames) of seeded random in-limit
+configurations (continuous joints within pi of 0); starts are q = 0 clipped into the limits, or
+random in-limit configurations. These
 arms have no exact minimum, so each goal gets a reference (``minimax_reference``): a multi-start
 local solve of min t subject to fk(q) = goal (and the tool axis on the goal ray in radial mode,
-along the approach direction, from above, in approach mode),
+along the approach direction, from above, in approach mode, the tool frame's orientation in pose
+mode, where the drawn configuration is one more start),
 |q_i - s_i| <= t_i^-1(t) (omega_i t under the servo law) and the limits, by scipy's SLSQP from
 ``starts`` random points. In
 radial and approach modes a goal is kept only when the reference finds such a pose (approach:
@@ -16,7 +18,8 @@ the bench only.
 
 Every method runs on the same goals, starts and seeds. The position error of every answer is
 measured by yourdfpy's forward kinematics of the URDF (not ours); a plan is reached when that
-error is at most 1 um (and the axis within 1e-6 rad of the goal ray in radial mode), and
+error is at most 1 um (and the axis within 1e-6 rad of the goal ray in radial mode, the
+orientation within 1e-6 rad in pose mode), and
 successful when it is reached with a motion time at most 0.1 % above the reference. The report
 also counts answers that beat the reference by more than 0.1 % (where the reference is weak).
 """
@@ -30,6 +33,7 @@ import warnings
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
+from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import joint_reach, SERVO
@@ -52,6 +56,14 @@ class ChainCase:
     seed: int
     reference_time: float
     reference_q: np.ndarray
+    orientation: np.ndarray | None = None     # pose mode: the tool frame's quaternion
+
+
+def _into_box(obj: Objective, x: np.ndarray) -> np.ndarray:
+    """Return joint angles x turned by whole turns into the search box where it is a turn."""
+    turn = obj.upper - obj.lower >= 2.0 * np.pi - 1e-12
+    return np.clip(np.where(turn, obj.lower + np.mod(x - obj.lower, 2.0 * np.pi), x),
+                   obj.lower, obj.upper)
 
 
 def _box(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
@@ -60,8 +72,8 @@ def _box(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
             np.where(np.isfinite(arm.upper), arm.upper, np.pi))
 
 
-def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
-                      ) -> tuple[float, np.ndarray | None]:
+def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24,
+                      also: np.ndarray | None = None) -> tuple[float, np.ndarray | None]:
     """
     Return the least motion time SLSQP finds from ``starts`` random points and the start.
 
@@ -71,11 +83,14 @@ def minimax_reference(obj: Objective, rng: np.random.Generator, starts: int = 24
     subject to c(x) = 0 (``Objective.residuals``), t_i^-1(t) >= |x_i - s_i| and the search
     box; a solve counts when its error is below 1e-9 m (and, in radial mode, its axis within
     1e-9 rad of the goal ray). The search box is the objective's (one turn for a joint with a
-    wider range). (inf, None) when no solve counts.
+    wider range). ``also``: more points to start from (planned joints). (inf, None) when no
+    solve counts.
     """
     best_time, best = np.inf, None
     start = np.clip(obj.start[: obj.lower.size], obj.lower, obj.upper)
-    for x0 in np.vstack((rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)), start)):
+    more = np.empty((0, obj.lower.size)) if also is None else np.atleast_2d(also)
+    for x0 in np.vstack((rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)), start,
+                         more)):
         x = local_minimax(obj, x0)
         t = np.inf if x is None else obj.motion_time(x[None])[0]
         if t < best_time:
@@ -216,32 +231,37 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
             raise ValueError(f'the reference found a pose for only {len(cases)} of '
                              f'{len(cases) + dropped} goals in {mode.value} mode')
         q = rng.uniform(low, high, (2, arm.n_joints))
-        goal = arm.tool(q[:1])[0][0]
+        frame = arm.frames(q[:1])[0, -1]
+        goal = frame[:3, 3]
+        orientation = quaternions(frame[None, :3, :3])[0] if mode is Mode.POSE else None
         if mode is Mode.APPROACH and goal[2] < 0.0:     # picks on and above the base's table
             dropped += 1
             continue
         start = q[1] if random_starts else np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
         plan_seed = int(rng.integers(2 ** 31))
         try:
-            obj = Objective(arm, goal, start, mode=mode, profile=profile)
+            obj = Objective(arm, goal, start, mode=mode, profile=profile,
+                            orientation=orientation)
         except InvalidRequest:
             dropped += 1
             continue
         staged = obj.in_plane()
-        best_time, best = minimax_reference(staged or obj, rng, starts)
+        drawn = _into_box(obj, q[0, :obj.arm.planned]) if mode is Mode.POSE else None
+        best_time, best = minimax_reference(staged or obj, rng, starts, drawn)
         if best is None and staged is not None:        # the other component is off
             best_time, best = minimax_reference(obj, rng, starts)
         if best is None:
             dropped += 1
             continue
-        cases.append(ChainCase(goal, start, plan_seed, best_time, obj.full(best)[0]))
+        cases.append(ChainCase(goal, start, plan_seed, best_time, obj.full(best)[0],
+                               orientation))
         if progress is not None:
             progress()
     return cases, dropped
 
 
 class IndependentFk:
-    """The tool point and axis by yourdfpy's forward kinematics of the same URDF (not ours)."""
+    """The tool point and axes by yourdfpy's forward kinematics of the same URDF (not ours)."""
 
     def __init__(self, urdf: str, arm: ArmModel) -> None:
         import yourdfpy
@@ -251,9 +271,11 @@ class IndependentFk:
                                          load_collision_meshes=False)
         self._arm = arm
 
-    def tool(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def tool(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """
-        Return the tool point and axis (3,) in the base frame for joint angles q.
+        Return the tool point and axes (V, 3) in the base frame for joint angles q.
+
+        ``tool`` (V, 3): the point and axes in the tip frame (``Objective.tool_frame``).
 
         trimesh's scene graph keeps a joint's old transform when the new one is within 1e-8 of
         it (``allclose``): a joint moved less than that since the last call (one answer on a
@@ -265,8 +287,9 @@ class IndependentFk:
         self._model.update_cfg(dict(zip(names, q)))
         tip = self._model.get_transform(frame_to=self._arm.tip_link,
                                         frame_from=self._arm.base_link)
-        return (tip[:3, :3] @ self._arm.tool_point + tip[:3, 3],
-                tip[:3, :3] @ self._arm.tool_axis)
+        out = tool @ tip[:3, :3].T
+        out[0] += tip[:3, 3]
+        return out
 
 
 @dataclass
@@ -275,7 +298,7 @@ class ChainResults:
 
     q: np.ndarray              # (n, n_joints) joint goals, rad
     error: np.ndarray          # position error by ``IndependentFk``, m
-    axis_error: np.ndarray     # angle of the tool axis to its target, rad (0 in free mode)
+    axis_error: np.ndarray     # the mode's angle error (``Objective.angle_errors``), rad (0 free)
     gap: np.ndarray            # R / reference - 1
     seconds: np.ndarray        # wall time per plan, s
     axis_limit: float = SUCCESS_AXIS_ERROR     # the largest axis error reached (``axis_limit``)
@@ -296,7 +319,8 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
     Return ikpy's inverse kinematics as a bench row for the chain of ``arm`` in ``urdf``.
 
     ikpy only reaches a pose (from the start as its initial guess); it does not minimise time.
-    In radial mode it is asked for the tool z axis along the goal ray.
+    In radial mode it is asked for the tool z axis along the goal ray, in pose mode for the
+    whole orientation.
     """
     path = [arm.base_link]                   # ikpy's elements: link, joint, link, ...
     for joint in joints_between(read_urdf(urdf), arm.base_link, arm.tip_link):
@@ -304,7 +328,7 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
     state: dict[str, object] = {}
 
     def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile) -> Answer:
+              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
         if 'chain' not in state:
             import ikpy.chain
 
@@ -322,6 +346,9 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
                   'orientation_mode': 'Z'} if mode is Mode.RADIAL else {}
         if mode is Mode.APPROACH:
             radial = {'target_orientation': np.array(TOP_DOWN), 'orientation_mode': 'Z'}
+        if mode is Mode.POSE:
+            radial = {'target_orientation': rotation_matrix(orientation),
+                      'orientation_mode': 'all'}
         found = np.asarray(chain.inverse_kinematics(goal, initial_position=initial, **radial))
         return Answer(found[chain.active_links_mask][: arm.planned],
                       joints=found[chain.active_links_mask])
@@ -333,12 +360,14 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
 def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: MotionProfile
           ) -> tuple[np.ndarray, float | None]:
     """Return the method's answer as every joint's angle, and its own time if it has one."""
-    answer = method.solve(arm, mode, case.goal, case.start, case.seed, profile)
+    answer = method.solve(arm, mode, case.goal, case.start, case.seed, profile,
+                          orientation=case.orientation)
     if answer.joints is not None:
         return answer.joints, answer.seconds
     if answer.plan is not None:
         return answer.plan.joint_goal, answer.seconds
-    obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
+    obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
+                    orientation=case.orientation)
     return obj.full(answer.x)[0], answer.seconds
 
 
@@ -351,16 +380,17 @@ def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmMod
                                 *(np.full(n, np.nan) for _ in range(4)), axis_limit(mode))
            for m in methods}
     for k, case in enumerate(cases):
-        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
+        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
+                        orientation=case.orientation)
         for method in methods:
             clock = time.perf_counter()
             q, seconds = _full(arm, method, mode, case, obj.profile)
             res = out[method.name]
             res.seconds[k] = time.perf_counter() - clock if seconds is None else seconds
             res.q[k] = q
-            p, u = fk.tool(q)
-            res.error[k] = np.linalg.norm(p - case.goal)
-            res.axis_error[k] = obj.axis_angle(u[None])[0] if obj.holds_axis else 0.0
+            tool = fk.tool(q, obj.tool_frame)
+            res.error[k] = np.linalg.norm(tool[0] - case.goal)
+            res.axis_error[k] = obj.angle_errors(tool[:, None])[0] if obj.holds_axis else 0.0
             moved = obj.motion_time(q[None, : obj.arm.planned])[0]
             res.gap[k] = moved / case.reference_time - 1.0
         if step is not None:

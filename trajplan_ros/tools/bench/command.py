@@ -227,8 +227,8 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
               f"{'' if mode is Mode.FREE else mode.value + ' '}pose for them"
               f"{' (or they lie below the base)' if mode is Mode.APPROACH else ''}.")
     print("success = error <= 1 um by yourdfpy's FK (radial: axis within 1e-6 rad of the goal "
-          'ray; approach, from above: within 1e-3 rad) and motion time at most 0.1 % above the '
-          'reference; time = wall time per plan.\n')
+          'ray; approach, from above: within 1e-3 rad; pose: orientation within 1e-6 rad) and '
+          'motion time at most 0.1 % above the reference; time = wall time per plan.\n')
     if args.quiet or importlib.util.find_spec('tqdm') is None:
         results = run_chain(methods, cases, arm, mode, fk, profile=args.motion)
     else:
@@ -247,6 +247,9 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
 
 def _run(args: argparse.Namespace) -> int:
     arm, mode = arm_from_arguments(args), Mode(args.mode)
+    if mode is Mode.POSE and not args.urdf:
+        raise UsageError('--mode pose is benchmarked on a URDF chain of six or more joints '
+                         '(--urdf)')
     args.motion = motion_from_arguments(args)
     args.motion.time_law(arm, DEFAULT_OMEGA)    # a profile without the limits it needs: refused
     methods, notes = _chosen_methods(args, arm)

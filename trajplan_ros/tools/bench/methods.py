@@ -61,13 +61,15 @@ class Answer:
     seconds: float | None = None
 
 
-Solver = Callable[[ArmModel, Mode, np.ndarray, np.ndarray, int, MotionProfile], Answer]
+#: ``solve(arm, mode, goal, start, seed, profile, orientation=None)``; ``orientation`` is a
+#: pose goal's quaternion (x, y, z, w).
+Solver = Callable[..., Answer]
 
 
 @dataclass(frozen=True)
 class Method:
     """
-    A row of the benchmark: ``solve(arm, mode, goal, start, seed, profile)``.
+    A row of the benchmark: ``solve(arm, mode, goal, start, seed, profile, orientation=None)``.
 
     ``requires`` names the optional package the method needs and ``imports`` the module it
     imports when it runs (``load`` imports it before the timed calls).
@@ -120,9 +122,10 @@ def load(methods: Sequence[Method]) -> None:
 
 def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None,
           arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-          profile: MotionProfile) -> Answer:
+          profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
     result = plan(goal, start, arm=arm, mode=mode, algorithm=algorithm, seed=seed,
-                  shaping=shaping, optimizer_options=options, motion=profile)
+                  shaping=shaping, optimizer_options=options, motion=profile,
+                  orientation=orientation)
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
     planned = planned_arm(arm, mode).planned                             # as the objective plans
@@ -130,10 +133,10 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
 
 
 def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile) -> Answer:
+              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
     from scipy.optimize import differential_evolution
 
-    obj = Objective(arm, goal, start, mode=mode, profile=profile)
+    obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
     # vectorized: x is (planned, S) for a generation and (planned, 1) while polishing
     found = differential_evolution(lambda x: obj(x.T).efficiency, list(zip(obj.lower, obj.upper)),
                                    vectorized=True, updating='deferred', polish=True,
@@ -142,8 +145,8 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
 
 
 def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile) -> Answer:
-    obj = Objective(arm, goal, start, mode=mode, profile=profile)
+              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
+    obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
     state = np.random.get_state()             # pyswarms draws from numpy's global generator
     np.random.seed(seed)
     try:
