@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, paper_arm
+from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.search.linearisation import (complete_null_basis, invert_symmetric,
                                                line_minimax, line_searches)
 from trajplan_ros.search.objective import Objective
@@ -18,8 +19,10 @@ def random_arm(rng: np.random.Generator, n: int) -> ArmModel:
         velocity=rng.uniform(0.1, 0.5, n))
 
 
-#: The objectives' names: 0 to 4 null directions, free and radial, on a few arms.
-NAMES = [f'{arm}-{mode}' for arm in ('paper', 'dh5', 'dh6', 'dh7') for mode in ('free', 'radial')]
+#: The objectives' names: 0 to 4 null directions, free and radial, on a few arms; poses on six
+#: and seven joints (the second tool axis in the residuals).
+NAMES = [f'{arm}-{mode}' for arm in ('paper', 'dh5', 'dh6', 'dh7') for mode in ('free', 'radial')
+         ] + ['dh6-pose', 'dh7-pose']
 
 
 def objective(name: str) -> Objective:
@@ -29,9 +32,10 @@ def objective(name: str) -> Objective:
     arm_name, mode = name.split('-')
     arm = arms[arm_name]
     rng = np.random.default_rng([11, list(arms).index(arm_name)])
-    goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, arm.n_joints)))[0][0]
+    frame = arm.frames(rng.uniform(arm.lower, arm.upper, (1, arm.n_joints)))[0, -1]
     start = rng.uniform(arm.lower, arm.upper, arm.n_joints)
-    return Objective(arm, goal, start, mode=mode)
+    orientation = quaternions(frame[None, :3, :3])[0] if mode == 'pose' else None
+    return Objective(arm, frame[:3, 3], start, mode=mode, orientation=orientation)
 
 
 def residuals(obj: Objective, x: np.ndarray) -> np.ndarray:
@@ -53,8 +57,15 @@ def test_linearisation_matches_numpy(name: str) -> None:
     h = 1e-7                                            # the Jacobian by central differences
     jac = np.stack([(residuals(obj, x + h * e) - residuals(obj, x - h * e)) / (2 * h)
                     for e in np.eye(x.shape[1])], axis=2)
-    pinv = np.linalg.pinv(jac)
-    np.testing.assert_allclose(here.pinv, pinv, rtol=0, atol=1e-5 * np.abs(pinv).max())
+    d = obj.tool_jacobian(x)                            # the Jacobian the kernels use
+    exact = np.swapaxes(obj.linear_residuals(*(np.swapaxes(j, 1, 2) for j in d.jacobians())),
+                        1, 2)
+    np.testing.assert_allclose(exact, jac, rtol=0, atol=1e-7)
+    jac = exact
+    gram = jac @ np.swapaxes(jac, 1, 2)                 # J^T (J J^T + mu I)^-1, the damped J^+
+    damp = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] * np.eye(gram.shape[1])
+    pinv = np.swapaxes(jac, 1, 2) @ np.linalg.inv(gram + damp)
+    np.testing.assert_allclose(here.pinv, pinv, rtol=0, atol=1e-6 * np.abs(pinv).max())
     free = max(x.shape[1] - c.shape[1], 0)
     assert here.null.shape == (12, free, x.shape[1])
     assert here.quad.shape == (12, free, free, x.shape[1])

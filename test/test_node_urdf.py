@@ -25,6 +25,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import ArmModel
+from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.tools.bench.published_arms import PUBLISHED
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 import yourdfpy
@@ -168,6 +169,32 @@ def test_a_goal_pose_orientation_is_the_approach_direction(planner, describe, pe
     peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
     planner.wait_for(r'goal_pose #\d+ \(0.2, 0.1, 0.02\) m from q = .*: not_reached: .*, axis '
                      r'\S+ rad from the approach direction', mark)
+    results = peer.set_parameters(f'{NS}/trajplan', [Parameter('goal_orientation',
+                                                               value='ignore')])
+    assert results[0].successful
+
+
+def test_a_goal_pose_is_planned_as_a_whole_pose(planner, describe, peer) -> None:
+    # a tool frame of the five-joint arm at a configuration: reachable with its orientation;
+    # the same point with the tool turned about its axis by 0.5 rad is not
+    describe(SO101.urdf.read_text(encoding='utf-8'))
+    results = peer.set_parameters(f'{NS}/trajplan', [Parameter('goal_orientation', value='pose')])
+    assert results[0].successful, results[0].reason
+    frame = ARM.frames(np.array([[0.239, -1.222, -0.228, 0.561, -0.383]]))[0, -1]
+    turned = frame[:3, :3] @ [[np.cos(0.5), -np.sin(0.5), 0.0], [np.sin(0.5), np.cos(0.5), 0.0],
+                              [0.0, 0.0, 1.0]]
+    mark = planner.mark()
+    for rotation, outcome in ((frame[:3, :3], 'reached in'), (turned, 'not_reached: ')):
+        pose = PoseStamped()
+        pose.header.frame_id = 'base_link'
+        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = frame[:3, 3]
+        o = pose.pose.orientation
+        o.x, o.y, o.z, o.w = (float(v) for v in quaternions(rotation[None])[0])
+        peer.publish(PoseStamped, f'{NS}/goal_pose', pose)
+        line = planner.wait_for(rf'goal_pose #\d+ {fmt(frame[:3, 3])} m from q = .*: {outcome}'
+                                r'.*orientation (?:is )?(\S+) rad from the goal orientation',
+                                mark)
+        assert float(line.group(1)) <= 1e-6 or outcome != 'reached in'
     results = peer.set_parameters(f'{NS}/trajplan', [Parameter('goal_orientation',
                                                                value='ignore')])
     assert results[0].successful

@@ -14,8 +14,8 @@ from typing import Callable
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import Header
-from trajplan_ros.collision.scene import pose_matrix
-from trajplan_ros.planning import plan, PlanResult, PlanStatus, Trajectory
+from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
+from trajplan_ros.planning import Mode, plan, PlanRequest, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
@@ -62,21 +62,31 @@ def _refusal(where: str, result: PlanResult, took: str) -> str:
 def in_base(job: Job, settings: Settings,
             start: PlanStart) -> tuple[np.ndarray, np.ndarray | None]:
     """
-    Return the job's goal in the base frame, and its approach direction there (or None).
+    Return the job's goal in the base frame, and its orientation there (3x3, or None).
 
-    The direction is a pose goal's z axis when ``goal_orientation`` is approach. The robot's
-    own forward kinematics at ``start`` poses the goal's frame.
+    The orientation of a pose goal, unless ``goal_orientation`` is ignore. The robot's own
+    forward kinematics at ``start`` poses the goal's frame.
     """
     s = settings
-    direction = None
-    if s.goal_orientation == 'approach' and job.orientation is not None:
+    rotation = None
+    if s.goal_orientation != 'ignore' and job.orientation is not None:
         q = np.asarray(job.orientation, dtype=float)      # a rotation: goal_problem checked
-        direction = pose_matrix((0.0, 0.0, 0.0), q / np.linalg.norm(q), job.label)[:3, 2]
+        rotation = rotation_matrix(q / np.linalg.norm(q))
     if job.frame in ('', s.base_frame):
-        return np.asarray(job.goal, dtype=float), direction
+        return np.asarray(job.goal, dtype=float), rotation
     pose = s.frames.to_base(job.frame, dict(zip(s.arm.joint_names, start.q)))
     goal = pose[:3, :3] @ np.asarray(job.goal, dtype=float) + pose[:3, 3]
-    return goal, None if direction is None else pose[:3, :3] @ direction
+    return goal, None if rotation is None else pose[:3, :3] @ rotation
+
+
+def _pointed(request: PlanRequest, rotation: np.ndarray | None,
+             goal_orientation: str) -> PlanRequest:
+    """Return the request with a pose goal's orientation (base frame) as the node uses it."""
+    if rotation is None:
+        return request
+    if goal_orientation == 'approach':
+        return request.replace(approach=rotation[:, 2])
+    return request.replace(mode=Mode.POSE, orientation=quaternions(rotation[None])[0])
 
 
 def run(job: Job, settings: Settings, start: PlanStart, header: Header,
@@ -87,7 +97,7 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     A goal in another frame is brought into the base frame first (``job.goal`` then holds it).
     """
     s = settings
-    goal, direction = in_base(job, s, start)
+    goal, rotation = in_base(job, s, start)
     moved = f" (in '{job.frame}': {describe_goal(job.goal)} m)" if job.frame not in (
         '', s.base_frame) else ''
     job.goal = tuple(goal.tolist())
@@ -95,9 +105,7 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
              f'{describe_goal(start.q)} rad{start.describe()}')
     request = s.request.replace(goal=job.goal, start=start.q,
                                 tolerance=job.tolerance or s.request.tolerance)
-    if direction is not None:
-        request = request.replace(approach=direction)
-    result = plan(request, stop=stop)
+    result = plan(_pointed(request, rotation, s.goal_orientation), stop=stop)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None

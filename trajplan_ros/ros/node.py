@@ -9,7 +9,8 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   publish the trajectory. While the node is busy only the newest goal waits; an older waiting
   goal is logged as superseded.
 * ``goal_pose`` (geometry_msgs/msg/PoseStamped; RViz's Goal Pose tool): a goal like ``goal``;
-  with ``goal_orientation: approach`` the tool axis points along its orientation's z axis.
+  with ``goal_orientation: approach`` the tool axis points along its orientation's z axis,
+  with ``goal_orientation: pose`` the tool frame takes its whole orientation.
 * ``plan_trajectory`` (nav_msgs/srv/GetPlan): plan ``request.goal.pose`` (its orientation as
   for ``goal_pose``). The response's plan is the tool path of the trajectory, one pose per
   point (empty on failure).
@@ -150,7 +151,7 @@ def goal_problem(frame: str, orientation: tuple[float, ...] | None,
             settings.frames.check(frame)
         except ValueError as exc:
             return str(exc)
-    if (settings.goal_orientation == 'approach' and orientation is not None
+    if (settings.goal_orientation != 'ignore' and orientation is not None
             and not (all(map(math.isfinite, orientation)) and any(orientation))):
         return f'the goal orientation {list(orientation)} is not a rotation (x, y, z, w)'
     return None

@@ -33,7 +33,8 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.frames import RobotFrames
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
-from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE, Mode,
+from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
+                                   DEFAULT_ORIENTATION_TOLERANCE, DEFAULT_TOLERANCE, Mode,
                                    PlanRequest)
 from trajplan_ros.search.objective import DEFAULT_OMEGA, TOP_DOWN
 
@@ -135,15 +136,18 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   bounds=(0.0, 1.0)),
     ParameterSpec('mode', Mode.FREE.value,
                   'free: position only; radial: the tool axis along the goal ray too '
-                  '(eq. 12-13); approach: along approach_direction',
-                  choices=tuple(m.value for m in Mode)),
+                  '(eq. 12-13); approach: along approach_direction (a full pose comes with '
+                  'each goal: goal_orientation pose)',
+                  choices=tuple(m.value for m in Mode if m is not Mode.POSE)),
     ParameterSpec('approach_direction', list(TOP_DOWN),
                   'approach mode: the direction of the tool axis in base_frame for Point goals '
                   '(0, 0, -1: from above)'),
     ParameterSpec('goal_orientation', 'ignore',
                   "how a pose goal's orientation is used (goal_pose, plan_trajectory, "
-                  'compute_plan): ignore, or approach (the tool axis along its z axis; Point '
-                  'goals then take approach_direction)', choices=('ignore', 'approach')),
+                  'compute_plan): ignore; approach (the tool axis along its z axis; Point '
+                  'goals then take approach_direction); or pose (the tool frame takes the '
+                  'whole orientation; Point goals plan in mode)',
+                  choices=('ignore', 'approach', 'pose')),
     ParameterSpec('algorithm', 'iepso', 'optimiser', choices=tuple(ALGORITHMS)),
     ParameterSpec('population', 40, 'particles per swarm', bounds=(2, 10000)),
     ParameterSpec('max_iterations', 1000, 'iteration cap', bounds=(1, 1000000)),
@@ -156,6 +160,10 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   'approach direction that counts as met, rad; 0: '
                   + ', '.join(f'{v:g} in {k} mode' for k, v in DEFAULT_AXIS_TOLERANCE.items()),
                   bounds=(0.0, 3.2)),
+    ParameterSpec('orientation_tolerance', DEFAULT_ORIENTATION_TOLERANCE,
+                  'goal_orientation pose: largest angle of the rotation between the goal '
+                  'orientation and the reached one that counts as met, rad',
+                  bounds=(1e-12, 3.2)),
     ParameterSpec('start_limit_margin', 0.05,
                   'a start joint this far outside its limits (rad) is planned from, the motion '
                   'bringing it inside, with a warning; further out the goal is refused',
@@ -198,7 +206,7 @@ class Settings:
     description: str = ''
     #: start_positions did not fit the described chain and all zeros stand in for it.
     start_ignored: bool = False
-    #: How a pose goal's orientation is used: 'ignore' or 'approach' (its z axis).
+    #: How a pose goal's orientation is used: 'ignore', 'approach' (its z axis) or 'pose'.
     goal_orientation: str = 'ignore'
 
     @property
@@ -288,7 +296,8 @@ def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
     request = PlanRequest(
         (), arm=arm, mode=mode, approach=values['approach_direction'], motion=motion,
         angular_velocity=values['angular_velocity'], tolerance=values['tolerance'],
-        axis_tolerance=values['axis_tolerance'] or None, algorithm=values['algorithm'],
+        axis_tolerance=values['axis_tolerance'] or None,
+        orientation_tolerance=values['orientation_tolerance'], algorithm=values['algorithm'],
         population=values['population'], max_iterations=values['max_iterations'],
         seed=None if values['seed'] < 0 else values['seed'],
         max_planning_time=values['max_planning_time'],

@@ -14,10 +14,10 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
+from trajplan_ros.planning import DEFAULT_ORIENTATION_TOLERANCE
 from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, describe_residual, plan,
                                            PlanRequest, PlanResult, PlanStatus, prepare)
-from trajplan_ros.planning.request import DEFAULT_ORIENTATION_TOLERANCE
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
