@@ -89,9 +89,6 @@ def test_trajplan_plans_approach_goals_and_reads_a_csv_header(
                  arm=ArmModel.from_urdf(str(PUBLISHED['so101'].urdf), None,
                                         'gripper_frame_link'), mode='approach', seed=0)
     assert first['joint_goal'] == again.joint_goal.tolist()     # the columns by joint name
-    goals.write_text('x,y,z,qx,qy,qz,qw\n0.2,0.1,0.02,0,0,0,1\n', encoding='utf-8')
-    assert main(['plan', '--goals', str(goals), *urdf]) == 2
-    assert 'pose goals (qx,qy,qz,qw) are not planned yet' in capsys.readouterr().err
 
 
 def test_only_a_pan_and_pitch_arm_first_holds_the_in_plane_component() -> None:

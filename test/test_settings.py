@@ -69,7 +69,7 @@ def test_defaults_give_the_paper_arm() -> None:
 
 @pytest.mark.parametrize('change, error, reason', [
     ({'mode': 'sideways'}, ValueError,
-     r"mode must be one of free, radial, approach, pose, got 'sideways'"),
+     r"mode must be one of free, radial, approach, got 'sideways'"),
     ({'algorithm': 'sa'}, ValueError, r'algorithm must be one of iepso, pso, spso, ga, de'),
     ({'base_frame': ''}, ValueError, r'base_frame must not be empty'),
     ({'start_positions': [0.0] * 3}, ValueError,
