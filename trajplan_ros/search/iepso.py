@@ -121,10 +121,13 @@ RADIAL_DEFAULTS = {'swarms': 12, 'polish_count': 2, 'polish_steps': 6}
 #: first steps try only the vertex sets of the SQP step (``polish``). The measurements behind
 #: these values: doc/benchmarks.md, "How the search's settings were chosen".
 WIDE_PROBES = 3
-#: How many times ``curve_search`` points the curve search of a pose follows curves through:
-#: the curves of the tool turning about its axis are long, and 20 walks of 17 rad missed the
-#: fastest of a UR5's eight solutions on 4 of 40 goals (40 walks: 1 of 40).
+#: Where a pose's solutions are isolated (six planned joints), the curve search follows the
+#: curves of the tool turning about its axis through ``POSE_CURVE_PROBES`` times
+#: ``curve_search`` points, ``POSE_CURVE_STEPS`` steps each way: those curves are long. On 100
+#: UR5 goals, 20 walks of 12 steps missed the fastest of its eight solutions on 6, 40 walks of
+#: 24 steps on 1 (doc/benchmarks.md, "Full poses").
 POSE_CURVE_PROBES = 2
+POSE_CURVE_STEPS = 24
 SCREENED = 3
 SCREEN_ERROR = 1e-6
 WIDE_TRUST = 1.5
@@ -383,7 +386,8 @@ def _curve_search(swarm: _Swarms, obj: Objective, rng: np.random.Generator, prob
     answer). ``interrupt``, when it asks to stop, ends every polish at its next step and skips
     what would follow.
     """
-    probes *= POSE_CURVE_PROBES if obj.mode is Mode.POSE else 1
+    if _isolated_pose(obj):
+        probes *= POSE_CURVE_PROBES
     if _by_multistart(obj):
         members = _round_members(swarm, rng, count)
         probed = _probes(obj, rng, probes * WIDE_PROBES)
@@ -424,7 +428,8 @@ def _along_curves(obj: Objective, rng: np.random.Generator, best: np.ndarray, re
     """Return the seeds along the curves through ``best`` and ``probes`` points, polished."""
     points = np.concatenate((best[None, :],
                              initial_population(rng, obj.lower, obj.upper, (probes,))))
-    seeds = curve_seeds(obj, points, best if reached else None)
+    walk = {'steps': POSE_CURVE_STEPS} if _isolated_pose(obj) else {}
+    seeds = curve_seeds(obj, points, best if reached else None, **walk)
     if not len(seeds):
         return seeds
     stop = _polish_is_enough(1, obj.arm.reach / 8, active=0.0, settled=ON_GOAL, faster=False)
@@ -474,6 +479,11 @@ def _by_multistart(obj: Objective) -> bool:
     if obj.holds_axis:
         return obj.arm.planned >= 6
     return obj.arm.planned != 4
+
+
+def _isolated_pose(obj: Objective) -> bool:
+    """Return whether ``obj`` is a pose whose solutions are isolated points (ours)."""
+    return obj.mode is Mode.POSE and obj.null_directions == 0
 
 
 def _probes(obj: Objective, rng: np.random.Generator, count: int) -> np.ndarray:
