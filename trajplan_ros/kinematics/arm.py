@@ -73,7 +73,7 @@ class ToolJacobian:
 
     @property
     def axes(self) -> np.ndarray:
-        """The signed joint axes Z_i, (N, 3, planned)."""
+        """Signed joint axes Z_i, (N, 3, planned)."""
         return self._columns(self.vectors)
 
     def jacobians(self) -> list[np.ndarray]:

@@ -382,8 +382,8 @@ def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
         arm = _six_joint_arm()
         frame = arm.frames(np.full((1, 6), 0.4))[0, -1]
         plan(frame[:3, 3], arm=arm, mode=Mode.FREE, seed=0)
-        plan(frame[:3, 3], arm=arm, mode=Mode.POSE, orientation=quaternions(frame[None, :3, :3])[0],
-             seed=0)
+        plan(frame[:3, 3], arm=arm, mode=Mode.POSE, seed=0,
+             orientation=quaternions(frame[None, :3, :3])[0])
 
     return warm_up(plans, announce)
 

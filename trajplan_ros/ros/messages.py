@@ -7,7 +7,6 @@ import array
 
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
-import numpy as np
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from trajplan_ros.kinematics import ArmModel

@@ -50,8 +50,8 @@ from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
 
 __all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'TOP_DOWN',
-           'direction_basis', 'errors_eq11', 'planned_arm', 'second_axis', 'tool_angle', 'tool_angles',
-           'unit_direction']
+           'direction_basis', 'errors_eq11', 'planned_arm', 'second_axis', 'tool_angle',
+           'tool_angles', 'unit_direction']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
