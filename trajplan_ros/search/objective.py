@@ -278,9 +278,10 @@ class Objective:
         #: (h, V - 1, 3): per orientation residual, what it takes of u (and w) (``residuals``).
         #: With fewer than all, the solutions are the larger sets ``solution_curve`` follows.
         self.across_basis = self._across_basis(across)
-        #: The tool in the tip frame: point, axis u0 and, for a pose, the second axis w0.
+        #: The tool in the tip frame: point, axis u0 and, where a residual takes it (a pose
+        #: holding all three), the second axis w0.
         self.tool_frame = np.array([arm.tool_point, arm.tool_axis] + (
-            [second_axis(arm.tool_axis)] if self.mode is Mode.POSE else []))
+            [second_axis(arm.tool_axis)] if self.across_basis.shape[1] == 2 else []))
         self._tail = arm.held_tail(self.start, self.tool_frame)
         #: The planned joints' chain as the kernels take it, the held ones at their start.
         self.chain = arm.chain(self._tail)
@@ -385,11 +386,11 @@ class Objective:
         if not self.holds_axis:
             return np.empty((0, 1, 3))
         ray = self.ray_basis
-        if self.mode is not Mode.POSE:
+        if self.mode is not Mode.POSE or across < 3:      # u alone
             return np.ascontiguousarray(ray[1: 1 + across, None, :])
         rows = np.zeros((3, 2, 3))
         rows[0, 0], rows[1, 0], rows[2, 1] = ray[1], ray[2], ray[2]
-        return rows[:across]
+        return rows
 
     @staticmethod
     def _check_across(across: int | None, mode: Mode) -> int:

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.forward import chain_hessian, tool_rows
+from trajplan_ros.kinematics.forward import Chain, chain_hessian, tool_rows
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
 from trajplan_ros.motion.time_law import joint_time, TimeLaw
 from trajplan_ros.search.linearisation import (damped_pseudo_inverses, minimum_norm_steps,
@@ -233,7 +233,7 @@ def _on_curves(obj: Objective, curve: Objective, probes: np.ndarray, step: np.nd
     points moved onto the limits can be that far) are NaN.
     """
     along = follow(curve, project_onto_curves(curve, probes), step, steps)     # (K, S, planned)
-    return _Walk(*points_on_curves(curve.problem, along))
+    return _Walk(*points_on_curves(curve.problem, obj.chain, along))
 
 
 @inlined_kernel
@@ -264,12 +264,14 @@ def snap_to_limits(along: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> N
 
 
 @kernel
-def points_on_curves(curve: Problem, along: np.ndarray
+def points_on_curves(curve: Problem, chain: Chain, along: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
     Return ``_Walk``'s points, samples, present and tool for the samples ``along`` (K, S, m).
 
-    See ``_on_curves``; ``along`` is changed in place (samples snapped onto the limits).
+    See ``_on_curves``; ``along`` is changed in place (samples snapped onto the limits). The
+    tool is the objective's, walked along its ``chain`` (with a pose's second axis, which the
+    curve of fewer residuals need not carry).
     """
     lower, upper, reach = curve.lower, curve.upper, curve.reach
     k, count, dim = along.shape
@@ -301,7 +303,7 @@ def points_on_curves(curve: Problem, along: np.ndarray
     flat = np.empty((count_inside, dim))
     for n in range(count_inside):
         flat[n] = points[inside[n] // size, inside[n] % size]
-    rows = tool_rows(curve.chain, flat, False)
+    rows = tool_rows(chain, flat, False)
     error = errors_eq11(rows, curve.goal, curve.ray, curve.across.shape[0], reach)
     tool = np.zeros((k * size, rows.shape[0], 3))
     for n in range(count_inside):
