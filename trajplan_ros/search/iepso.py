@@ -650,11 +650,10 @@ def iepso(obj: Objective, *, population: int = 40, max_iter: int = 1000, tol: fl
 
     ``inertia`` and ``c3`` are the (first, last) values of w and c3. ``max_velocity`` caps
     each velocity component at that fraction of the joint's range. ``swarms``,
-    ``polish_count`` and ``polish_steps`` default by mode (``FREE_DEFAULTS``,
-    ``RADIAL_DEFAULTS``, ``POSE_CURVES_DEFAULTS``), ``agreement`` to 2. Without ``polish``
-    this is the paper's algorithm alone, stopped by ``History.stalled``. ``interrupt`` is
-    asked after every iteration and after every polish step; its reason ends the run with the
-    best answer so far.
+    ``polish_count`` and ``polish_steps`` default by mode (``..._DEFAULTS``), ``agreement``
+    to 2. Without ``polish`` this is the paper's algorithm alone, stopped by
+    ``History.stalled``. ``interrupt`` is asked after every iteration and after every polish
+    step; its reason ends the run with the best answer so far.
     """
     swarms, polish_count, polish_steps, agreement = _settings(
         obj, population, max_iter, polish_period, swarms, polish_count, polish_steps, agreement)
