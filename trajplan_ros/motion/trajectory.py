@@ -29,7 +29,7 @@ the controller's cubics or quintics are the profile itself (see ``motion_traject
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -38,8 +38,8 @@ from trajplan_ros.motion.rest_to_rest import (GAP_NS, joint_profiles, JointProfi
                                               SMALLEST_TURN)
 from trajplan_ros.motion.time_law import JERK_LIMITED, SERVO, TimeLaw
 
-__all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory',
-           'servo_trajectory', 'trajectory_points']
+__all__ = ['Trajectory', 'motion_points', 'motion_states', 'motion_trajectory', 'path_points',
+           'path_trajectory', 'servo_trajectory', 'trajectory_points']
 
 #: Times closer than this (s) are one time: a microsecond, 1000 times a message's nanosecond.
 _RESOLUTION = 1e-6
@@ -316,6 +316,38 @@ def motion_trajectory(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing:
     velocity[-1], acceleration[-1] = 0.0, 0.0
     return Trajectory(tuple(names), start, t_ns / 1e9, positions, velocity,
                       acceleration if law.kind == JERK_LIMITED else None)
+
+
+def path_trajectory(points: Sequence[np.ndarray], law: TimeLaw, timing: Timing, *,
+                    sample_period: float = 0.1,
+                    joint_names: tuple[str, ...] | None = None) -> Trajectory:
+    """
+    Return the motion through ``points`` (the start, via points, the goal), at rest at each.
+
+    Each segment is ``motion_trajectory``'s; a via point is a point of the message with zero
+    velocity and acceleration, so the controller stops there as the check assumed.
+    """
+    segments = [motion_trajectory(a, b, law, timing, sample_period=sample_period,
+                                  joint_names=joint_names) for a, b in zip(points, points[1:])]
+    if len(segments) == 1:
+        return segments[0]
+    offsets = np.cumsum([0] + [np.round(s.times[-1] * 1e9) for s in segments[:-1]])
+    times = np.concatenate([(np.round(s.times * 1e9) + o) / 1e9
+                            for s, o in zip(segments, offsets)])
+
+    def joined(name: str) -> np.ndarray | None:
+        parts = [getattr(s, name) for s in segments]
+        return None if parts[0] is None else np.vstack(parts)
+
+    return Trajectory(segments[0].joint_names, segments[0].start, times,
+                      joined('positions'), joined('velocities'), joined('accelerations'))
+
+
+def path_points(points: Sequence[np.ndarray], law: TimeLaw, timing: Timing,
+                sample_period: float = 0.1) -> int:
+    """Return how many points ``path_trajectory`` gives, without building a long one."""
+    return sum(motion_points(a, b, law, timing, sample_period)
+               for a, b in zip(points, points[1:]))
 
 
 def motion_points(start: np.ndarray, goal: np.ndarray, law: TimeLaw, timing: Timing,

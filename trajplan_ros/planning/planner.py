@@ -34,10 +34,11 @@ from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import TimeLaw
-from trajplan_ros.motion.trajectory import motion_points, motion_trajectory, Trajectory
+from trajplan_ros.motion.trajectory import path_points, path_trajectory, Trajectory
 from trajplan_ros.planning.request import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, PlanRequest)
-from trajplan_ros.search.free_goal import free_joint_goal
+from trajplan_ros.search.detour import Detour, detour
+from trajplan_ros.search.free_goal import free_joint_goal, reached_goals
 from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 
@@ -81,6 +82,7 @@ class PlanResult:
     motion: MotionProfile = field(default_factory=MotionProfile)
     clearance_m: float = float('nan')             # least clearance of the motion (collisions)
     clearance_pair: str = ''                      # where it occurs
+    via_points: tuple[np.ndarray, ...] = ()       # every joint's angles at each via point
     joint_names: tuple[str, ...] = ()             # the arm's, in the trajectory's order
     law: TimeLaw | None = field(default=None, repr=False)   # the whole arm's, for its motion
     history_efficiency: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
@@ -110,16 +112,21 @@ class PlanResult:
         """
         Return the joint trajectory from the start to the joint goal under ``motion``.
 
+        Through the via points, if any, at rest at each (``motion.trajectory.path_trajectory``).
+
         The result knows its arm's joints and limits; ``arm`` (optional) is checked against it.
         """
-        law = self._law(arm)
-        return motion_trajectory(self.start, self.joint_goal, law, self.motion.timing,
-                                 sample_period=sample_period, joint_names=self.joint_names)
+        return path_trajectory(self.waypoints, self._law(arm), self.motion.timing,
+                               sample_period=sample_period, joint_names=self.joint_names)
 
     def trajectory_points(self, arm: ArmModel | None = None, sample_period: float = 0.1) -> int:
         """Return how many points ``trajectory`` has, without building a long one."""
-        return motion_points(self.start, self.joint_goal, self._law(arm), self.motion.timing,
-                             sample_period)
+        return path_points(self.waypoints, self._law(arm), self.motion.timing, sample_period)
+
+    @property
+    def waypoints(self) -> list[np.ndarray]:
+        """Return the motion's rests: the start, the via points, the joint goal."""
+        return [self.start, *self.via_points, self.joint_goal]
 
     def _law(self, arm: ArmModel | None) -> TimeLaw:
         """Return the motion's time law; refuse a plan without a motion, or another arm."""
@@ -197,7 +204,7 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
         result.message += f"; {'; '.join(obj.start_notes)}: the motion brings it inside"
     if r.world is None or not result.success:
         return result
-    return _collision_free(result, obj, r.world, r.seed, r.tolerance, clock)
+    return _collision_free(result, obj, r, clock, interrupt)
 
 
 def _search(obj: Objective, r: PlanRequest,
@@ -232,20 +239,33 @@ def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:
         raise InvalidRequest(f'goal {goal.tolist()} is inside obstacle {inside!r}')
 
 
-def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
-                    seed: int | np.random.Generator | None, tolerance: float,
-                    clock: float) -> PlanResult:
-    """Return a reached plan moved to the fastest free motion found, or NOT_REACHED."""
+def _collision_free(result: PlanResult, obj: Objective, r: PlanRequest, clock: float,
+                    interrupt: Interrupt | None) -> PlanResult:
+    """
+    Return a reached plan moved to the fastest free motion found, or NOT_REACHED.
+
+    The fastest free direct motion; where none is found and ``detours`` allows, the fastest
+    free motion through a via point (``search.detour``).
+    """
+    world, seed = r.world, r.seed
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x0 = result.joint_goal[:obj.arm.planned]
-    found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng, tolerance)
+    found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng, r.tolerance)
     result.clearance_m, result.clearance_pair = found.clearance.clearance, found.clearance.pair
     clear = found.clearance
     start_note = (f'; it starts within the padding ({clear.start_within}) and comes no closer'
                   if clear.start_within else '')
-    if found.x is None:
+    around = None
+    if found.x is None and r.detours:
+        around = detour(obj, world, result.law, result.motion.timing,
+                        reached_goals(obj, rng, r.tolerance), rng, interrupt)
+    if around is not None:
+        _went_around(result, obj, around)
+    elif found.x is None:
         result.status = PlanStatus.NOT_REACHED
         result.message = f'every direct motion found collides: {clear.pair}{start_note}'
+        if r.detours:
+            result.message += '; no free motion through a via point found either'
     else:
         joint_goal = obj.full(found.x)[0]
         p, _ = obj.arm.tool(joint_goal[None, :])
@@ -258,6 +278,20 @@ def _collision_free(result: PlanResult, obj: Objective, world: CollisionWorld,
                           f'{clear.describe()}{start_note}')
     result.plan_time_s = time.perf_counter() - clock
     return result
+
+
+def _went_around(result: PlanResult, obj: Objective, around: Detour) -> None:
+    """Put the motion through via points ``around`` into ``result``."""
+    joint_goal = obj.full(around.x)[0]
+    tool = obj.tool(around.x[None])
+    result.joint_goal, result.via_points = joint_goal, around.vias
+    result.position_error_m = float(np.linalg.norm(tool[0, 0] - obj.goal))
+    result.motion_time_s, result.efficiency = around.duration, float('nan')
+    clear = around.clearance
+    result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
+    points = f"{len(around.vias)} point{'s' if len(around.vias) > 1 else ''}"
+    result.message = (f'reached in {around.duration:.4f} s of motion via {points}, error '
+                      f"{describe_residual(result.position_error_m, 'm')}, {clear.describe()}")
 
 
 def _interrupt(max_planning_time: float | None,

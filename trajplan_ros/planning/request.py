@@ -96,6 +96,8 @@ class PlanRequest:
     :param shaping: the rewards-and-punishment settings (None: Table 4's).
     :param optimizer_options: further keywords of the optimiser (e.g. {"swarms": 4} for IEPSO).
     :param max_planning_time: longest search (s, monotonic clock); None: no limit.
+    :param detours: with a ``world``: where no direct motion to the goal is free, plan the
+        fastest free motion found through a via point (``search.detour``).
     :param start_limit_margin: how far (rad) a start joint may lie outside its limits (a
         calibrated arm reads a little past them): it is planned from where it is, the motion
         bringing it inside, with a note in the message; further out, the request is REJECTED.
@@ -122,6 +124,7 @@ class PlanRequest:
     optimizer_options: Mapping[str, Any] = field(default_factory=dict)
     max_planning_time: float | None = None
     start_limit_margin: float = 0.05
+    detours: bool = True
 
     def __post_init__(self) -> None:
         """Hold the goal as floats (ValueError if it is not numbers) and the mode as a Mode."""
@@ -213,6 +216,8 @@ class PlanRequest:
             raise ValueError(f'seed must be None, an integer >= 0 or a numpy Generator, '
                              f'got {self.seed!r}')
         self._check_options()
+        if not isinstance(self.detours, bool):
+            raise ValueError(f'detours must be true or false, got {self.detours!r}')
         unit_direction(self.approach)
         if self.orientation is not None and self.mode is not Mode.POSE:
             raise ValueError(f'an orientation is for pose mode, not {self.mode.value}')

@@ -134,6 +134,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('padding', DEFAULT_PADDING,
                   'least clearance a motion keeps from obstacles and between links, m',
                   bounds=(0.0, 1.0)),
+    ParameterSpec('detours', True,
+                  'with collision_check: where no direct motion is free, plan the fastest free '
+                  'motion found through one or two via points'),
     ParameterSpec('mode', Mode.FREE.value,
                   'free: position only; radial: the tool axis along the goal ray too '
                   '(eq. 12-13); approach: along approach_direction (a full pose comes with '
@@ -301,7 +304,7 @@ def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
         population=values['population'], max_iterations=values['max_iterations'],
         seed=None if values['seed'] < 0 else values['seed'],
         max_planning_time=values['max_planning_time'],
-        start_limit_margin=values['start_limit_margin'])
+        start_limit_margin=values['start_limit_margin'], detours=values['detours'])
     request.validate()
     return request
 

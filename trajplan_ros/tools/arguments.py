@@ -110,7 +110,7 @@ def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add --scene, --srdf and --padding (any of them turns the collision check on)."""
+    """Add --scene, --srdf and --padding (any of them turns the collision check on), --detours."""
     group = parser.add_argument_group('collisions (default: not checked)')
     group.add_argument('--scene', metavar='FILE',
                        help='YAML file of obstacles in the base frame (boxes, spheres, '
@@ -120,6 +120,9 @@ def add_collision_arguments(parser: argparse.ArgumentParser) -> None:
                             '(default: computed as MoveIt Setup Assistant does)')
     group.add_argument('--padding', type=finite_number, metavar='M',
                        help=f'least clearance in metres (default {DEFAULT_PADDING})')
+    group.add_argument('--detours', action=argparse.BooleanOptionalAction, default=True,
+                       help='where no direct motion is free, plan the fastest free motion '
+                            'found through one or two via points (default on)')
 
 
 def package_share(package: str) -> str:

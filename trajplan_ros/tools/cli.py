@@ -269,7 +269,8 @@ def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
         motion=motion_from_arguments(args), angular_velocity=args.angular_velocity,
         world=world_from_arguments(args, arm), tolerance=args.tolerance,
         axis_tolerance=args.axis_tolerance, algorithm=args.algorithm, seed=args.seed,
-        max_planning_time=args.max_planning_time, start_limit_margin=args.start_limit_margin)
+        max_planning_time=args.max_planning_time, start_limit_margin=args.start_limit_margin,
+        detours=args.detours)
     request.validate()
     return request
 

@@ -37,9 +37,9 @@ from trajplan_ros.collision.free_motion import check_motion, START_TOLERANCE, St
 from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.kinematics.rotations import rotation_matrix
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Timing
-from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.planning.planner import plan, PlanRequest, PlanResult, PlanStatus, prepare
 from trajplan_ros.search.free_goal import project_onto_goal
 from trajplan_ros.search.objective import Objective
@@ -95,12 +95,8 @@ def _obstacle(rng: np.random.Generator, index: int, reach: float) -> Obstacle:
             'sphere': (size / 3,), 'cylinder': (size, size / 6)}[kind]
     position = np.array([*rng.uniform(-reach, reach, 2), rng.uniform(0.0, reach)])
     axis = rng.normal(size=4)
-    quaternion = axis / np.linalg.norm(axis)
     pose = np.eye(4)
-    x, y, z, w = quaternion
-    pose[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                    [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                    [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    pose[:3, :3] = rotation_matrix(axis / np.linalg.norm(axis))
     pose[:3, 3] = position
     return Obstacle(f'{kind}{index}', Shape.primitive(kind, dims, pose, 'bench'))
 
@@ -173,10 +169,10 @@ class Row:
 
 
 def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
-    """Return the plan's joint angles every millisecond, the end included."""
-    law = MotionProfile().time_law(bench.arm, omega)
-    t = np.append(np.arange(0.0, result.motion_time_s, 1e-3), result.motion_time_s)
-    return motion_states(result.start, result.joint_goal, law, Timing.INDEPENDENT, t)[0]
+    """Return the plan's joint angles every millisecond, the end included (via points too)."""
+    trajectory = result.trajectory(sample_period=1.0)
+    t = np.append(np.arange(0.0, trajectory.duration, 1e-3), trajectory.duration)
+    return trajectory.at_time(t)[0]
 
 
 def _measure(bench: BenchArm, world: CollisionWorld, check: IndependentCheck, goal: np.ndarray,
