@@ -73,6 +73,7 @@ def test_a_scene_sent_over_dds_changes_the_next_plan(planner: NodeProcess,
     assert after['status'] == 'succeeded', after
     assert float(after['motion_time_s']) > unchecked.motion_time_s + 1e-3
     assert float(after['clearance_m']) >= 0.01 and after['clearance_pair']
+    assert after['via_points'] == '0'                     # a direct motion
 
 
 def test_a_bad_marker_is_refused_and_the_scene_kept(planner: NodeProcess,

@@ -52,6 +52,7 @@ class Outcome:
     timed_out: bool = False                  # ended at max_planning_time
     motion_time_s: float | None = None       # of a published trajectory
     clearance: tuple[float, str] | None = None   # least clearance (m) and where (collisions)
+    via_points: int | None = None            # via points of a published trajectory
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -126,4 +127,5 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     return Outcome(True, f'{where}: {result.message}; {took}; {sent} {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,
-                   plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance)
+                   plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance,
+                   via_points=len(result.via_points))

@@ -422,7 +422,8 @@ class PlannerNode(Node):
 
     def _publish_outcome(self, job: Job, status: str, reason: str,
                          motion_time_s: float | None = None,
-                         clearance: tuple[float, str] | None = None) -> None:
+                         clearance: tuple[float, str] | None = None,
+                         via_points: int | None = None) -> None:
         """Tell ``plan_results`` how ``job`` ended: from any thread, the first time only."""
         with self._answer_lock:
             if job.reported:
@@ -431,7 +432,7 @@ class PlannerNode(Node):
         self._results.publish(outcomes.outcome_status(
             f'{self.get_fully_qualified_name()}: {job.label}',
             'service call' if job.is_call else 'goal', job.stamp, job.goal, status, reason,
-            motion_time_s, clearance))
+            motion_time_s, clearance, via_points))
 
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
@@ -509,7 +510,7 @@ class PlannerNode(Node):
                 self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
             # after the trajectory: a caller told "succeeded" finds it published
             self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s,
-                                  outcome.clearance)
+                                  outcome.clearance, outcome.via_points)
         if outcome.succeeded:
             self._log.info(outcome.log)
         else:

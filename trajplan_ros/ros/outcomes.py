@@ -15,9 +15,10 @@ other end); ``name`` the node and the job (``/trajplan: service call #3``); ``va
 ``request`` (``service call`` or ``goal``), ``stamp`` (a call's ``sec.nanosec``, else empty),
 ``x``, ``y``, ``z`` (the goal, m, exact decimal round trip), ``status`` (``succeeded``,
 ``rejected``, ``not_reached``, ``timed_out``, ``cancelled``, ``refused``, ``superseded``,
-``shut_down`` or ``failed``), ``motion_time_s`` (empty unless planned), and with the
-collision check on, ``clearance_m`` and ``clearance_pair``: the motion's least clearance (m)
-and where it occurs (empty otherwise).
+``shut_down`` or ``failed``), ``motion_time_s`` and ``via_points`` (how many via points the
+motion rests at: 0 for a direct motion; both empty unless planned), and with the collision
+check on, ``clearance_m`` and ``clearance_pair``: the motion's least clearance (m) and where it
+occurs (empty otherwise).
 """
 from __future__ import annotations
 
@@ -47,7 +48,8 @@ def describe_stamp(stamp: tuple[int, int] | None) -> str:
 def outcome_status(name: str, request: str, stamp: tuple[int, int] | None,
                    goal: Sequence[float], status: str, message: str,
                    motion_time_s: float | None = None,
-                   clearance: tuple[float, str] | None = None) -> DiagnosticStatus:
+                   clearance: tuple[float, str] | None = None,
+                   via_points: int | None = None) -> DiagnosticStatus:
     """Build the DiagnosticStatus of one goal's or call's end (see the module docstring)."""
     if status == 'succeeded':
         level = DiagnosticStatus.OK
@@ -57,6 +59,7 @@ def outcome_status(name: str, request: str, stamp: tuple[int, int] | None,
               **{axis: repr(float(v)) for axis, v in zip('xyz', goal)},
               'status': status,
               'motion_time_s': '' if motion_time_s is None else repr(float(motion_time_s)),
+              'via_points': '' if via_points is None else str(via_points),
               'clearance_m': '' if clearance is None else repr(float(clearance[0])),
               'clearance_pair': '' if clearance is None else clearance[1]}
     return DiagnosticStatus(level=level, name=name, message=message, hardware_id='',
