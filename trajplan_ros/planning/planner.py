@@ -26,6 +26,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
+from trajplan_ros.collision.free_motion import Clearance
 from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
@@ -37,8 +38,8 @@ from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.motion.trajectory import path_points, path_trajectory, Trajectory
 from trajplan_ros.planning.request import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                            DEFAULT_TOLERANCE, PlanRequest)
-from trajplan_ros.search.detour import Detour, detour
-from trajplan_ros.search.free_goal import free_joint_goal, reached_goals
+from trajplan_ros.search.detour import detour
+from trajplan_ros.search.free_goal import free_joint_goal
 from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 
@@ -252,46 +253,45 @@ def _collision_free(result: PlanResult, obj: Objective, r: PlanRequest, clock: f
     x0 = result.joint_goal[:obj.arm.planned]
     found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng, r.tolerance)
     result.clearance_m, result.clearance_pair = found.clearance.clearance, found.clearance.pair
-    clear = found.clearance
-    start_note = (f'; it starts within the padding ({clear.start_within}) and comes no closer'
-                  if clear.start_within else '')
     around = None
     if found.x is None and r.detours:
-        around = detour(obj, world, result.law, result.motion.timing,
-                        reached_goals(obj, rng, r.tolerance), rng, interrupt)
+        around = detour(obj, world, result.law, result.motion.timing, found.goals, rng,
+                        interrupt)
     if around is not None:
-        _went_around(result, obj, around)
+        _moved(result, obj, around.x, around.duration, float('nan'), around.clearance,
+               around.vias)
     elif found.x is None:
         result.status = PlanStatus.NOT_REACHED
-        result.message = f'every direct motion found collides: {clear.pair}{start_note}'
+        result.message = (f'every direct motion found collides: {found.clearance.pair}'
+                          f'{_start_note(found.clearance)}')
         if r.detours:
             result.message += '; no free motion through a via point found either'
     else:
-        joint_goal = obj.full(found.x)[0]
-        p, _ = obj.arm.tool(joint_goal[None, :])
-        result.joint_goal = joint_goal
-        result.position_error_m = float(np.linalg.norm(p[0] - obj.goal))
-        result.motion_time_s = float(obj.motion_time(found.x[None])[0])
-        result.efficiency = float(obj(found.x[None]).efficiency[0])
-        result.message = (f'reached in {result.motion_time_s:.4f} s of motion, error '
-                          f"{describe_residual(result.position_error_m, 'm')}, "
-                          f'{clear.describe()}{start_note}')
+        _moved(result, obj, found.x, float(obj.motion_time(found.x[None])[0]),
+               float(obj(found.x[None]).efficiency[0]), found.clearance)
     result.plan_time_s = time.perf_counter() - clock
     return result
 
 
-def _went_around(result: PlanResult, obj: Objective, around: Detour) -> None:
-    """Put the motion through via points ``around`` into ``result``."""
-    joint_goal = obj.full(around.x)[0]
-    tool = obj.tool(around.x[None])
-    result.joint_goal, result.via_points = joint_goal, around.vias
-    result.position_error_m = float(np.linalg.norm(tool[0, 0] - obj.goal))
-    result.motion_time_s, result.efficiency = around.duration, float('nan')
-    clear = around.clearance
+def _start_note(clear: Clearance) -> str:
+    """Return what the message says of a pair within the padding at the start ('' if none)."""
+    return (f'; it starts within the padding ({clear.start_within}) and comes no closer'
+            if clear.start_within else '')
+
+
+def _moved(result: PlanResult, obj: Objective, x: np.ndarray, duration: float,
+           efficiency: float, clear: Clearance, vias: tuple[np.ndarray, ...] = ()) -> None:
+    """Put the free motion to joint goal x (planned joints), through ``vias``, into ``result``."""
+    joint_goal = obj.full(x)[0]
+    p, _ = obj.arm.tool(joint_goal[None, :])
+    result.joint_goal, result.via_points = joint_goal, vias
+    result.position_error_m = float(np.linalg.norm(p[0] - obj.goal))
+    result.motion_time_s, result.efficiency = duration, efficiency
     result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
-    points = f"{len(around.vias)} point{'s' if len(around.vias) > 1 else ''}"
-    result.message = (f'reached in {around.duration:.4f} s of motion via {points}, error '
-                      f"{describe_residual(result.position_error_m, 'm')}, {clear.describe()}")
+    via = f" via {len(vias)} point{'s' if len(vias) > 1 else ''}" if vias else ''
+    result.message = (f'reached in {duration:.4f} s of motion{via}, error '
+                      f"{describe_residual(result.position_error_m, 'm')}, "
+                      f'{clear.describe()}{_start_note(clear)}')
 
 
 def _interrupt(max_planning_time: float | None,

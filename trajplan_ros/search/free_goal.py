@@ -23,7 +23,7 @@ from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import Linearisation, polish
 
-__all__ = ['free_joint_goal', 'project_onto_goal', 'reached_goals', 'SearchOutcome']
+__all__ = ['free_joint_goal', 'project_onto_goal', 'SearchOutcome']
 
 #: Random joint vectors the search projects onto the goal's solutions in one round (a goal's
 #: free solutions can be few, and a redundant arm's solutions many).
@@ -45,6 +45,7 @@ class SearchOutcome:
     x: np.ndarray | None
     clearance: Clearance          # the chosen motion's, or the blocked first candidate's
     checked: int                  # motions checked
+    goals: np.ndarray             # the first round's reached joint goals, fastest first (K, m)
 
 
 def project_onto_goal(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STEPS) -> np.ndarray:
@@ -55,7 +56,7 @@ def project_onto_goal(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STE
     return x
 
 
-def reached_goals(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
+def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
     """
     Return reached joint goals, fastest first: random ones projected, and those polished.
 
@@ -87,21 +88,22 @@ def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing:
 
     first = check(x0)
     if first.free:
-        return SearchOutcome(x0, first, 1)
-    checked, colliding, best = 1, [x0], None
+        return SearchOutcome(x0, first, 1, np.empty((0, obj.arm.planned)))
+    checked, colliding, best, drawn = 1, [x0], None, []
     for _ in range(_rounds(obj)):
-        found, spent = _first_free(obj, check, reached_goals(obj, rng, tolerance), best, colliding)
+        drawn.append(_candidates(obj, rng, tolerance))
+        found, spent = _first_free(obj, check, drawn[-1], best, colliding)
         checked += spent
         if found is None and best is not None:
             break
         best = found or best
     if best is None:
-        return SearchOutcome(None, first, checked)
+        return SearchOutcome(None, first, checked, drawn[0])
     colliding.sort(key=lambda x: _time(obj, x))
     for target in colliding[:3]:
         best, spent = _bisect(obj, check, best, target, tolerance)
         checked += spent
-    return SearchOutcome(best[0], best[1], checked)
+    return SearchOutcome(best[0], best[1], checked, drawn[0])
 
 
 def _rounds(obj: Objective) -> int:
