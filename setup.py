@@ -42,8 +42,9 @@ setup(
                  'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
                  'flake8-docstrings==1.7.0', 'flake8-import-order==0.18.2',
                  'flake8-quotes==3.4.0', 'pydocstyle==6.3.0'],
+        # ompl: OMPL 2's RRTConnect, bench-detours' peer (no rosdep key: the bench only)
         'bench': ['scipy', 'pyswarms', 'tqdm', 'ikpy', 'example-robot-data', 'ruckig',
-                  'python-fcl'],
+                  'python-fcl', 'ompl'],
         'figures': ['matplotlib'],
     },
     zip_safe=True,

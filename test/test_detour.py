@@ -9,7 +9,8 @@ from trajplan_ros import plan, PlanStatus
 from trajplan_ros.collision.free_motion import START_TOLERANCE
 from trajplan_ros.planning.planner import PlanRequest
 from trajplan_ros.tools.bench.clearance import IndependentCheck
-from trajplan_ros.tools.bench.collision_bench import _goal, _sampled, BenchArm, draw_scene
+from trajplan_ros.tools.bench.collision_bench import (BenchArm, draw_goal, draw_scene,
+                                                      every_millisecond)
 
 
 @pytest.fixture(scope='module')
@@ -19,7 +20,7 @@ def blocked(tmp_path_factory: pytest.TempPathFactory):
     rng = np.random.default_rng(12)             # bench-collisions' draws, replayed to scene 12
     for _ in range(13):
         world = draw_scene(bench, rng, 0.01)
-        goals = [_goal(bench, world, rng) for _ in range(5)]
+        goals = [draw_goal(bench, world, rng) for _ in range(5)]
     request = PlanRequest(goals[1], bench.start, arm=bench.arm, seed=121, world=world)
     return bench, world, request
 
@@ -39,7 +40,8 @@ def test_a_detour_keeps_the_padding_by_python_fcl_and_rests_at_its_via_point(blo
     assert 'via 1 point' in result.message and len(result.via_points) == 1
     assert result.position_error_m <= 1e-9
     check = IndependentCheck(world, bench.urdf)
-    assert check.violations(_sampled(bench, result, 0.2), START_TOLERANCE) == []
+    assert check.violations(every_millisecond(result.trajectory(sample_period=1.0)),
+                            START_TOLERANCE) == []
     trajectory = result.trajectory(sample_period=0.1)
     assert trajectory.duration == pytest.approx(result.motion_time_s, abs=1e-8)
     via = result.via_points[0]

@@ -256,10 +256,10 @@ def _collision_free(result: PlanResult, obj: Objective, r: PlanRequest, clock: f
     around = None
     if found.x is None and r.detours:
         around = detour(obj, world, result.law, result.motion.timing, found.goals, rng,
-                        interrupt)
+                        r.tolerance, interrupt)
     if around is not None:
-        _moved(result, obj, around.x, around.duration, float('nan'), around.clearance,
-               around.vias)
+        efficiency = float(obj(around.x[None]).efficiency[0]) if not around.vias else np.nan
+        _moved(result, obj, around.x, around.duration, efficiency, around.clearance, around.vias)
     elif found.x is None:
         result.status = PlanStatus.NOT_REACHED
         result.message = (f'every direct motion found collides: {found.clearance.pair}'

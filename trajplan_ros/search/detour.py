@@ -25,7 +25,8 @@ import numpy as np
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.free_motion import check_motion, Clearance, StartLimits
 from trajplan_ros.motion.motion_profile import Timing
-from trajplan_ros.motion.time_law import motion_times, TimeLaw
+from trajplan_ros.motion.time_law import joint_reach, motion_times, TimeLaw
+from trajplan_ros.search.free_goal import reached_goals
 from trajplan_ros.search.objective import Objective
 
 __all__ = ['Detour', 'detour']
@@ -36,8 +37,10 @@ VIAS = 96
 GOALS = 6
 #: Most segments checked before the search gives up.
 CHECKS = 240
-#: Bisection steps towards the direct motion's midpoint.
-BISECTIONS = 5
+#: Bisection steps towards the least-time motion, per via point.
+BISECTIONS = 6
+#: Most rounds of random joint goals drawn where too few known ones are clear.
+ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -52,33 +55,65 @@ class Detour:
 
 
 def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
-           goals: np.ndarray, rng: np.random.Generator,
+           goals: np.ndarray, rng: np.random.Generator, tolerance: float,
            stop: Callable[[], object] | None = None) -> Detour | None:
     """
     Return the fastest motion start -> v -> joint goal found with both segments free, or None.
 
-    ``goals`` (K, planned): the goal's reached joint solutions, fastest first (of which the
-    first ``GOALS`` whose pose is itself clear are tried); ``law``: the
-    whole arm's time law; ``stop``: asked before every check, anything but None ends the search
-    with what it has. See the module docstring.
+    ``goals`` (K, planned): the goal's reached joint solutions, fastest first; ``law``: the
+    whole arm's time law; ``tolerance``: the largest error (m) of a reached goal; ``stop``:
+    asked before every check, anything but None ends the search with what it has. See the
+    module docstring.
     """
     check = _Checker(obj, world, law, timing, stop)
-    goals = np.array([g for g in goals[:4 * GOALS] if check.segment(g, g).free][:GOALS])
+    goals, best = _clear_goals(obj, check, goals, rng, tolerance)
     if not len(goals):                       # every joint goal found is itself in collision
         return None
     start = obj.planned_start
     vias = _vias(obj, goals, rng)
     first = _durations(obj, vias, start[None, :])[:, 0]                    # (V,)
     second = _durations(obj, vias, goals)                                   # (V, G)
-    order = np.argsort((first[:, None] + second).ravel(), kind='stable')
-    for flat in order:
+    total = (first[:, None] + second).ravel()
+    for flat in np.argsort(total, kind='stable'):
+        if check.spent(CHECKS) or (best is not None and total[flat] >= best.duration):
+            return best
+        v, g = divmod(int(flat), len(goals))
+        found = check.through_points((start, vias[v], goals[g]))
+        if found is not None:
+            found = _tightened(obj, check, found)
+            return found if best is None or found.duration < best.duration else best
+    if best is not None:
+        return best
+    found = _two_vias(obj, check, vias, goals, first, second)
+    return None if found is None else _tightened(obj, check, found)
+
+
+def _clear_goals(obj: Objective, check: _Checker, goals: np.ndarray, rng: np.random.Generator,
+                 tolerance: float) -> tuple[np.ndarray, Detour | None]:
+    """
+    Return up to ``GOALS`` joint goals whose own pose keeps the padding, fastest first.
+
+    The known ones first (their direct motions collide); where fewer are clear, up to
+    ``ROUNDS`` rounds of the free-goal search's candidates (``reached_goals``): near an
+    obstacle few of the goal's solutions are. A goal drawn here may have a free direct motion:
+    the fastest found is returned too (else None).
+    """
+    clear = [g for g in goals if check.pose(g)][:GOALS]
+    known, direct = len(clear), None
+    for _ in range(ROUNDS):
+        if len(clear) >= GOALS or check.spent(check.count + 1):
+            break
+        clear += [g for g in reached_goals(obj, rng, tolerance) if check.pose(g)]
+    for goal in sorted(clear[known:], key=lambda g: float(obj.motion_time(g[None])[0])):
         if check.spent(CHECKS):
             break
-        v, g = divmod(int(flat), len(goals))
-        found = check.through(vias[v], goals[g])
-        if found is not None:
-            return _pulled(obj, check, found)
-    return _two_vias(obj, check, vias, goals, first, second)
+        direct = check.through_points((obj.planned_start, goal))
+        if direct is not None:
+            break
+    if not clear:
+        return np.empty((0, obj.arm.planned)), direct
+    clear = np.array(clear)
+    return clear[np.argsort(obj.motion_time(clear), kind='stable')][:GOALS], direct
 
 
 def _two_vias(obj: Objective, check: _Checker, vias: np.ndarray, goals: np.ndarray,
@@ -108,7 +143,8 @@ def _two_vias(obj: Objective, check: _Checker, vias: np.ndarray, goals: np.ndarr
                 return None
             a, b = divmod(int(flat), len(onward))
             if check.segment(vias[reached[a]], vias[onward[b]]).free:
-                return check.through_both(vias[reached[a]], vias[onward[b]], goals[g])
+                return check.through_points((obj.planned_start, vias[reached[a]],
+                                             vias[onward[b]], goals[g]))
     return None
 
 
@@ -155,31 +191,28 @@ class _Checker:
         seen = self._seen.get(a.tobytes() + b.tobytes())
         return seen is not None and seen.free
 
-    def segment(self, a: np.ndarray, b: np.ndarray) -> Clearance:
+    def segment(self, a: np.ndarray, b: np.ndarray, counted: bool = True) -> Clearance:
         """Return how the direct motion from a to b (planned joints) keeps clear."""
         key = a.tobytes() + b.tobytes()
         if key not in self._seen:
-            self.count += 1
+            self.count += counted
             full_a, full_b = self.obj.full(a)[0], self.obj.full(b)[0]
             self._seen[key] = check_motion(self.world, full_a, full_b, self.law, self.timing,
                                            True, self._limits)
         return self._seen[key]
 
-    def through(self, via: np.ndarray, goal: np.ndarray) -> Detour | None:
-        """Return the motion start -> via -> goal if both segments are free, else None."""
-        start = self.obj.planned_start
-        there = self.segment(start, via)
-        if not there.free:
-            return None
-        on = self.segment(via, goal)
-        if not on.free:
-            return None
-        return self._detour((start, via, goal), (there, on))
+    def through_points(self, points: tuple[np.ndarray, ...]) -> Detour | None:
+        """Return the motion through ``points`` (start first) if every segment is free."""
+        segments = []
+        for p, q in zip(points, points[1:]):
+            segments.append(self.segment(p, q))
+            if not segments[-1].free:
+                return None
+        return self._detour(points, tuple(segments))
 
-    def through_both(self, a: np.ndarray, b: np.ndarray, goal: np.ndarray) -> Detour:
-        """Return the motion start -> a -> b -> goal, its segments checked free already."""
-        points = (self.obj.planned_start, a, b, goal)
-        return self._detour(points, tuple(self.segment(p, q) for p, q in zip(points, points[1:])))
+    def pose(self, x: np.ndarray) -> bool:
+        """Return whether the arm at rest at x (planned joints) keeps the padding."""
+        return self.segment(x, x, counted=False).free     # one instant: not a motion's cost
 
     def _detour(self, points: tuple[np.ndarray, ...], segments: tuple[Clearance, ...]) -> Detour:
         """Return the motion through ``points`` (planned joints) whose segments keep clear so."""
@@ -190,18 +223,49 @@ class _Checker:
                       duration, self.count)
 
 
-def _pulled(obj: Objective, check: _Checker, found: Detour) -> Detour:
-    """Return ``found`` with its via point moved towards the direct motion where that helps."""
-    via = found.vias[0][:obj.arm.planned]
-    middle = 0.5 * (obj.planned_start + found.x)
-    low, high, best = 0.0, 1.0, found
-    for _ in range(BISECTIONS):
-        if check.spent(check.count + 2):
-            break
-        share = 0.5 * (low + high)
-        trial = check.through((1.0 - share) * via + share * middle, found.x)
-        if trial is not None and trial.duration < best.duration:
-            low, best = share, trial
-        else:
-            high = share
+def _tightened(obj: Objective, check: _Checker, found: Detour) -> Detour:
+    """
+    Return ``found`` with each via point moved towards the least-time motion where it helps.
+
+    Via point v between points p and n, the motion through it taking t1 + t2 s: for a total
+    D between the direct motion's T(p, n) and t1 + t2, v is clipped into the box of the points
+    each joint reaches from p in D t1 / (t1 + t2) and from n in D t2 / (t1 + t2) s
+    (``joint_reach``): at D = t1 + t2 that is v itself, at D = T(p, n) a via point that costs
+    nothing over the direct motion. D is bisected, each step kept where both segments stay free
+    and the motion gets shorter.
+    """
+    points = [obj.planned_start, *(v[:obj.arm.planned] for v in found.vias), found.x]
+    best = found
+    for k in range(1, len(points) - 1):
+        before, after = points[k - 1], points[k + 1]
+        t1, t2 = (float(_durations(obj, a[None], b[None])[0, 0])
+                  for a, b in ((before, points[k]), (points[k], after)))
+        direct = float(_durations(obj, before[None], after[None])[0, 0])
+        low, high = 0.0, 1.0
+        for _ in range(BISECTIONS):
+            if check.spent(check.count + 2):
+                break
+            share = 0.5 * (low + high)
+            total = direct + share * (t1 + t2 - direct)
+            via = _clipped(obj, points[k], before, after, total * t1 / (t1 + t2),
+                           total * t2 / (t1 + t2))
+            trial = None if via is None else check.through_points(
+                (*points[:k], via, *points[k + 1:]))
+            if trial is not None and trial.duration < best.duration:
+                high, best, points[k] = share, trial, via
+            else:
+                low = share
     return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+
+
+def _clipped(obj: Objective, via: np.ndarray, before: np.ndarray, after: np.ndarray,
+             t1: float, t2: float) -> np.ndarray | None:
+    """Return via clipped into the points reached from before in t1 and after in t2 s."""
+    law = obj.law
+    reach_1 = np.array([joint_reach(law, j, t1) for j in range(len(via))])
+    reach_2 = np.array([joint_reach(law, j, t2) for j in range(len(via))])
+    low = np.maximum(before - reach_1, after - reach_2)
+    high = np.minimum(before + reach_1, after + reach_2)
+    if np.any(low > high):                     # under acceleration limits: too short a total
+        return None
+    return np.clip(via, low, high)

@@ -23,7 +23,7 @@ from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import Linearisation, polish
 
-__all__ = ['free_joint_goal', 'project_onto_goal', 'SearchOutcome']
+__all__ = ['free_joint_goal', 'project_onto_goal', 'reached_goals', 'SearchOutcome']
 
 #: Random joint vectors the search projects onto the goal's solutions in one round (a goal's
 #: free solutions can be few, and a redundant arm's solutions many).
@@ -56,7 +56,7 @@ def project_onto_goal(obj: Objective, x: np.ndarray, steps: int = PROJECTION_STE
     return x
 
 
-def _candidates(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
+def reached_goals(obj: Objective, rng: np.random.Generator, tolerance: float) -> np.ndarray:
     """
     Return reached joint goals, fastest first: random ones projected, and those polished.
 
@@ -91,7 +91,7 @@ def free_joint_goal(obj: Objective, world: CollisionWorld, law: TimeLaw, timing:
         return SearchOutcome(x0, first, 1, np.empty((0, obj.arm.planned)))
     checked, colliding, best, drawn = 1, [x0], None, []
     for _ in range(_rounds(obj)):
-        drawn.append(_candidates(obj, rng, tolerance))
+        drawn.append(reached_goals(obj, rng, tolerance))
         found, spent = _first_free(obj, check, drawn[-1], best, colliding)
         checked += spent
         if found is None and best is not None:

@@ -24,7 +24,7 @@ from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_argum
                                           add_motion_arguments, arm_from_arguments,
                                           finite_number, motion_from_arguments, positive_count,
                                           UsageError, world_from_arguments)
-from trajplan_ros.tools.bench import collision_bench
+from trajplan_ros.tools.bench import collision_bench, detour_bench
 
 
 __all__ = ['main', 'build_parser']
@@ -117,8 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plan(sub)
     # each subcommand imports its optional extras (scipy, matplotlib, rclpy) only when it runs
     for add_parser in (node_commands.add_call_parser, node_commands.add_goal_parser,
-                       bench.add_parser, collision_bench.add_parser, figures.add_parser, _add_urdf,
-                       demo.add_parser):
+                       bench.add_parser, collision_bench.add_parser, detour_bench.add_parser,
+                       figures.add_parser, _add_urdf, demo.add_parser):
         add_parser(sub)
     return parser
 

@@ -40,7 +40,8 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.rotations import rotation_matrix
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Timing
-from trajplan_ros.planning.planner import plan, PlanRequest, PlanResult, PlanStatus, prepare
+from trajplan_ros.motion.trajectory import Trajectory
+from trajplan_ros.planning.planner import plan, PlanRequest, PlanStatus, prepare
 from trajplan_ros.search.free_goal import project_onto_goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
@@ -48,7 +49,8 @@ from trajplan_ros.tools.arguments import positive_count
 from trajplan_ros.tools.bench.clearance import IndependentCheck
 from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
 
-__all__ = ['add_parser', 'BenchArm', 'draw_scene']
+__all__ = ['add_parser', 'BenchArm', 'draw_goal', 'draw_scene', 'every_millisecond',
+           'goal_solutions']
 
 #: Where each arm starts (free of itself), and its SRDF below robots_dir() if it has one.
 STARTS = {'so101': ((0.0, 0.0, 0.0, 0.0, 0.0), None),
@@ -123,7 +125,7 @@ def draw_scene(bench: BenchArm, rng: np.random.Generator, padding: float, most: 
     return CollisionWorld(bench.model, Scene(tuple(obstacles)), padding)
 
 
-def _goal(bench: BenchArm, world: CollisionWorld, rng: np.random.Generator) -> np.ndarray:
+def draw_goal(bench: BenchArm, world: CollisionWorld, rng: np.random.Generator) -> np.ndarray:
     """Return the tool point of random joint angles, outside every obstacle."""
     lower = np.where(np.isfinite(bench.arm.lower), bench.arm.lower, -np.pi)
     upper = np.where(np.isfinite(bench.arm.upper), bench.arm.upper, np.pi)
@@ -133,17 +135,24 @@ def _goal(bench: BenchArm, world: CollisionWorld, rng: np.random.Generator) -> n
             return goal
 
 
-def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega: float,
-                 count: int) -> float | None:
-    """Return the fastest free motion time among ``count`` joint solutions, or None."""
+def goal_solutions(bench: BenchArm, goal: np.ndarray, omega: float, count: int
+                   ) -> tuple[Objective, np.ndarray]:
+    """Return the goal's objective and ``count`` joint solutions' reached ones, fastest first."""
     obj = Objective(bench.arm, goal, bench.start, omega=omega)
-    law = MotionProfile().time_law(bench.arm, omega)
     rng = np.random.default_rng(12345)
     projected = project_onto_goal(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(obj.tool(x)) <= 1e-6]
+    return obj, x[np.argsort(obj.motion_time(x), kind='stable')]
+
+
+def _brute_force(bench: BenchArm, world: CollisionWorld, goal: np.ndarray, omega: float,
+                 count: int) -> float | None:
+    """Return the fastest free motion time among ``count`` joint solutions, or None."""
+    obj, x = goal_solutions(bench, goal, omega, count)
+    law = MotionProfile().time_law(bench.arm, omega)
     limits = StartLimits.at(world, bench.start)
-    for candidate in x[np.argsort(obj.motion_time(x), kind='stable')]:
+    for candidate in x:
         if check_motion(world, bench.start, obj.full(candidate)[0], law, Timing.INDEPENDENT,
                         limits=limits).free:
             return float(obj.motion_time(candidate[None])[0])
@@ -168,9 +177,8 @@ class Row:
     broken: list[str]           # python-fcl's pairs that break the padding along the plan
 
 
-def _sampled(bench: BenchArm, result: PlanResult, omega: float) -> np.ndarray:
-    """Return the plan's joint angles every millisecond, the end included (via points too)."""
-    trajectory = result.trajectory(sample_period=1.0)
+def every_millisecond(trajectory: Trajectory) -> np.ndarray:
+    """Return a trajectory's joint angles every millisecond, the end included."""
     t = np.append(np.arange(0.0, trajectory.duration, 1e-3), trajectory.duration)
     return trajectory.at_time(t)[0]
 
@@ -185,7 +193,8 @@ def _measure(bench: BenchArm, world: CollisionWorld, check: IndependentCheck, go
     result = plan(request.replace(world=world))
     broken = []
     if result.success:
-        broken = check.violations(_sampled(bench, result, omega), START_TOLERANCE)
+        broken = check.violations(every_millisecond(result.trajectory(sample_period=1.0)),
+                                  START_TOLERANCE)
     brute = _brute_force(bench, world, goal, omega, args.brute) if none.success else None
     return Row(bench.name, scene, seed, goal.tolist(), len(world.scene.obstacles) - 1,
                result.status.value,
@@ -264,7 +273,7 @@ def run(args: argparse.Namespace) -> int:
                 world = draw_scene(bench, rng, args.padding, args.obstacles)
                 check = IndependentCheck(world, bench.urdf)
                 for _ in range(args.goals):
-                    rows.append(_measure(bench, world, check, _goal(bench, world, rng), args,
+                    rows.append(_measure(bench, world, check, draw_goal(bench, world, rng), args,
                                          int(rng.integers(2**31)), scene))
                     if args.rows is not None:
                         with args.rows.open('a', encoding='utf-8') as out:
