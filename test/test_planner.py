@@ -25,7 +25,8 @@ FAR = [0.36, 0.0, 0.05]
 KEYS = {'goal', 'success', 'status', 'joint_goal', 'position_error_m', 'axis_error_rad',
         'orientation_error_rad',
         'motion_time_s', 'efficiency', 'iterations', 'evaluations', 'plan_time_s', 'algorithm',
-        'mode', 'profile', 'timing', 'clearance_m', 'clearance_pair', 'message'}
+        'mode', 'profile', 'timing', 'clearance_m', 'clearance_pair', 'via_points',
+        'message'}
 
 
 def test_paper_example_succeeds_with_the_exact_optimum():

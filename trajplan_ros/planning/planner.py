@@ -161,6 +161,7 @@ class PlanResult:
             'timing': self.motion.timing.value,
             'clearance_m': num(self.clearance_m),
             'clearance_pair': self.clearance_pair or None,
+            'via_points': [[float(v) for v in via] for via in self.via_points],
             'message': self.message,
         }
 

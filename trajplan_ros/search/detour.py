@@ -39,6 +39,8 @@ GOALS = 6
 CHECKS = 240
 #: Bisection steps towards the least-time motion, per via point.
 BISECTIONS = 6
+#: Random moves of each via point after the bisection.
+TRIES = 24
 #: Most rounds of random joint goals drawn where too few known ones are clear.
 ROUNDS = 3
 
@@ -79,13 +81,13 @@ def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
             return best
         v, g = divmod(int(flat), len(goals))
         found = check.through_points((start, vias[v], goals[g]))
-        if found is not None:
-            found = _tightened(obj, check, found)
-            return found if best is None or found.duration < best.duration else best
+        if found is not None:               # the fastest pair free; the search goes on for
+            found = _tightened(obj, check, found, rng)      # one shorter once tightened
+            best = found if best is None or found.duration < best.duration else best
     if best is not None:
         return best
     found = _two_vias(obj, check, vias, goals, first, second)
-    return None if found is None else _tightened(obj, check, found)
+    return None if found is None else _tightened(obj, check, found, rng)
 
 
 def _clear_goals(obj: Objective, check: _Checker, goals: np.ndarray, rng: np.random.Generator,
@@ -223,7 +225,8 @@ class _Checker:
                       duration, self.count)
 
 
-def _tightened(obj: Objective, check: _Checker, found: Detour) -> Detour:
+def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Generator
+               ) -> Detour:
     """
     Return ``found`` with each via point moved towards the least-time motion where it helps.
 
@@ -232,30 +235,50 @@ def _tightened(obj: Objective, check: _Checker, found: Detour) -> Detour:
     each joint reaches from p in D t1 / (t1 + t2) and from n in D t2 / (t1 + t2) s
     (``joint_reach``): at D = t1 + t2 that is v itself, at D = T(p, n) a via point that costs
     nothing over the direct motion. D is bisected, each step kept where both segments stay free
-    and the motion gets shorter.
+    and the motion gets shorter. Then ``TRIES`` times, v moved by normal noise on the scale of
+    the detour's extra turn is clipped into the box of a D drawn below t1 + t2: a shorter motion
+    around the obstacle's other side or edge, kept where it is free.
     """
     points = [obj.planned_start, *(v[:obj.arm.planned] for v in found.vias), found.x]
     best = found
     for k in range(1, len(points) - 1):
-        before, after = points[k - 1], points[k + 1]
-        t1, t2 = (float(_durations(obj, a[None], b[None])[0, 0])
-                  for a, b in ((before, points[k]), (points[k], after)))
-        direct = float(_durations(obj, before[None], after[None])[0, 0])
-        low, high = 0.0, 1.0
-        for _ in range(BISECTIONS):
+        anchor, low, high = points[k], 0.0, 1.0
+        for attempt in range(BISECTIONS + TRIES):
             if check.spent(check.count + 2):
                 break
-            share = 0.5 * (low + high)
-            total = direct + share * (t1 + t2 - direct)
-            via = _clipped(obj, points[k], before, after, total * t1 / (t1 + t2),
-                           total * t2 / (t1 + t2))
+            if attempt < BISECTIONS:
+                share = 0.5 * (low + high)
+                via = _shortened(obj, anchor, anchor, points[k - 1], points[k + 1], share)
+            else:
+                extra = (best.duration - _durations(obj, points[k - 1][None],
+                                                    points[k + 1][None])[0, 0])
+                moved = points[k] + (extra * obj.law.velocity
+                                     * rng.standard_normal(obj.arm.planned))
+                via = _shortened(obj, points[k], np.clip(moved, obj.lower, obj.upper),
+                                 points[k - 1], points[k + 1], rng.uniform())
             trial = None if via is None else check.through_points(
                 (*points[:k], via, *points[k + 1:]))
-            if trial is not None and trial.duration < best.duration:
-                high, best, points[k] = share, trial, via
-            else:
-                low = share
+            better = trial is not None and trial.duration < best.duration
+            if better:
+                best, points[k] = trial, via
+            if attempt < BISECTIONS:
+                high, low = (share, low) if better else (high, share)
     return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+
+
+def _shortened(obj: Objective, via: np.ndarray, moved: np.ndarray, before: np.ndarray,
+               after: np.ndarray, share: float) -> np.ndarray | None:
+    """
+    Return ``moved`` clipped into the box of ``via``'s split at ``share`` of its extra time.
+
+    The total is T(before, after) plus ``share`` of the time the motion through ``via`` takes
+    beyond it, split between the two segments as through ``via``; None where the box is empty.
+    """
+    t1 = float(_durations(obj, before[None], via[None])[0, 0])
+    t2 = float(_durations(obj, via[None], after[None])[0, 0])
+    direct = float(_durations(obj, before[None], after[None])[0, 0])
+    total = direct + share * (t1 + t2 - direct)
+    return _clipped(obj, moved, before, after, total * t1 / (t1 + t2), total * t2 / (t1 + t2))
 
 
 def _clipped(obj: Objective, via: np.ndarray, before: np.ndarray, after: np.ndarray,

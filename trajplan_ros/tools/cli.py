@@ -209,9 +209,10 @@ def _human(result: PlanResult, arm: ArmModel) -> str:
         law = '' if motion == MotionProfile() else f' ({motion.describe()})'
         turn = ('' if np.isnan(result.orientation_error_rad) else
                 f", orientation error {describe_residual(result.orientation_error_rad, 'rad')}")
+        score = ('' if np.isnan(result.efficiency) else     # F is a direct motion's (eq. 9)
+                 f', efficiency F {result.efficiency:.4f}')
         lines.append(f'motion time {result.motion_time_s:.4f} s{law}, position error '
-                     f"{describe_residual(result.position_error_m, 'm')}{turn}, efficiency F "
-                     f'{result.efficiency:.4f}, '
+                     f"{describe_residual(result.position_error_m, 'm')}{turn}{score}, "
                      f'{result.iterations} iterations, '
                      f'planned in {1e3 * result.plan_time_s:.1f} ms')
     return '\n'.join(lines)
