@@ -17,7 +17,9 @@ from node_under_test import LIVENESS_S, NodeProcess
 import numpy as np
 import pytest
 from std_msgs.msg import Header
-from trajplan_ros import paper_arm, plan
+from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros import ArmCollision, CollisionWorld, paper_arm, plan, Scene
+from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Timing
 from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.ros.outcomes import outcome_values
@@ -96,3 +98,36 @@ def test_collision_markers_show_the_scene_and_the_spheres(planner: NodeProcess,
     assert markers[0].action == Marker.DELETEALL
     assert {m.ns for m in markers[1:]} <= {'scene', 'arm_spheres'}
     assert any(m.ns == 'arm_spheres' for m in markers)
+
+
+#: The README's box: no direct motion from q = 0 to TARGET is free.
+BOX_SIZE, BOX_AT = (0.13, 0.08, 0.15), (0.056, 0.098, 0.158)
+
+
+def test_a_goal_behind_a_box_is_published_as_one_motion_through_its_via_point(
+        start_node, peer: RosClient, tmp_path) -> None:
+    scene = tmp_path / 'box.yaml'
+    scene.write_text(f'obstacles:\n  - {{id: box, type: box, dimensions: {list(BOX_SIZE)}, '
+                     f'position: {list(BOX_AT)}}}\n')
+    node = start_node('-r', '__ns:=/behind_a_box', '-p', 'collision_check:=true',
+                      '-p', f'scene_file:={scene}')
+    try:
+        trajectories = peer.inbox(JointTrajectory, '/behind_a_box/joint_trajectory')
+        outcomes = peer.inbox(DiagnosticStatus, '/behind_a_box/plan_results')
+        peer.call(GetPlan, '/behind_a_box/plan_trajectory', plan_request(TARGET))
+        outcome = outcomes.get(timeout=LIVENESS_S)
+        message = trajectories.get(timeout=LIVENESS_S)
+    finally:
+        assert node.stop() == 0, node.output
+    values = outcome_values(outcome)
+    assert values['status'] == 'succeeded' and values['via_points'] == '1', outcome.message
+    # the same plan by the library on the same shapes, from the node's start (q = 0): its via
+    # point is a point of the message
+    urdf = tmp_path / 'paper_arm.urdf'
+    urdf.write_text(urdf_xml(ARM, velocity=0.2))
+    world = CollisionWorld(ArmCollision.from_urdf(urdf, ARM), Scene.from_file(scene), 0.01)
+    mine = plan(TARGET, start=np.zeros(5), seed=0, world=world, max_planning_time=1.0)
+    assert mine.message.split(', least')[0] == outcome.message.split(', least')[0]
+    points = np.array([p.positions for p in message.points])
+    assert np.min(np.max(np.abs(points - mine.via_points[0]), axis=1)) < 1e-9
+    np.testing.assert_allclose(points[-1], mine.joint_goal, atol=1e-9)
