@@ -136,7 +136,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   bounds=(0.0, 1.0)),
     ParameterSpec('detours', True,
                   'with collision_check: where no direct motion is free, plan the fastest free '
-                  'motion found through one or two via points'),
+                  'motion found through up to four via points'),
     ParameterSpec('mode', Mode.FREE.value,
                   'free: position only; radial: the tool axis along the goal ray too '
                   '(eq. 12-13); approach: along approach_direction (a full pose comes with '

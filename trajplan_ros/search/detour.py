@@ -6,14 +6,15 @@ Motions through via points: where no direct motion to the goal is free, the fast
 Not part of the paper. The motion is start -> v -> joint goal, each segment a direct motion
 under the plan's profile and timing from rest to rest, so each keeps the padding along its
 whole length by the same continuous check as a direct motion (``free_motion.check_motion``).
-Its duration is the sum of the segments' (eq. 10 for each). The joint goal is free among the
-goal's solutions (``free_goal``'s candidates, fastest first) and v among joint vectors drawn
-inside the limits (the held joints at their start). Pairs (v, joint goal) are checked in the
-order of their duration, each segment once; the first free pair is then pulled towards the
-midpoint of its direct motion by bisection, each step kept where both segments stay free and
-the motion gets shorter. Where no pair is free within ``CHECKS`` segments, two via points: a
-from the via points the start reaches freely, b from those that reach a joint goal freely,
-joined by a third free segment (``_two_vias``).
+Its duration is the sum of the segments' (eq. 10 for each). The joint goals are the goal's
+solutions whose own pose is clear (``_clear_goals``: the free-goal search's, more drawn where
+too few are), fastest first; v among joint vectors drawn inside the limits (the held joints at
+their start). Pairs (v, joint goal) are checked in the order of their duration, each segment
+once, while that beats the best motion found. A free one is then shortened: each via point
+clipped towards the least-time box (``_tightened``), then corners cut (``_shortcut``), which
+may leave up to ``MOST_VIAS`` via points. Where no pair is free within ``CHECKS`` segments, two
+via points: a from the via points the start reaches freely, b from those that reach a joint
+goal freely, joined by a third free segment (``_two_vias``).
 """
 from __future__ import annotations
 
@@ -41,6 +42,11 @@ CHECKS = 240
 BISECTIONS = 6
 #: Random moves of each via point after the bisection.
 TRIES = 24
+#: Tries to cut a corner of the motion, and the most via points that leaves.
+SHORTCUTS = 80
+MOST_VIAS = 4
+#: The least share of the duration a cut corner must save: a rest more is worth no less.
+CUT_GAIN = 0.02
 #: Most rounds of random joint goals drawn where too few known ones are clear.
 ROUNDS = 3
 
@@ -81,13 +87,14 @@ def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
             return best
         v, g = divmod(int(flat), len(goals))
         found = check.through_points((start, vias[v], goals[g]))
-        if found is not None:               # the fastest pair free; the search goes on for
-            found = _tightened(obj, check, found, rng)      # one shorter once tightened
+        if found is not None:         # the fastest pair free; the search goes on for one
+            found = _shortcut(obj, check, _tightened(obj, check, found, rng), rng)
             best = found if best is None or found.duration < best.duration else best
     if best is not None:
         return best
     found = _two_vias(obj, check, vias, goals, first, second)
-    return None if found is None else _tightened(obj, check, found, rng)
+    return None if found is None else _shortcut(obj, check, _tightened(obj, check, found, rng),
+                                                rng)
 
 
 def _clear_goals(obj: Objective, check: _Checker, goals: np.ndarray, rng: np.random.Generator,
@@ -219,10 +226,8 @@ class _Checker:
     def _detour(self, points: tuple[np.ndarray, ...], segments: tuple[Clearance, ...]) -> Detour:
         """Return the motion through ``points`` (planned joints) whose segments keep clear so."""
         least = min(segments, key=lambda c: c.clearance)
-        duration = sum(float(_durations(self.obj, p[None], q[None])[0, 0])
-                       for p, q in zip(points, points[1:]))
         return Detour(points[-1], tuple(self.obj.full(v)[0] for v in points[1:-1]), least,
-                      duration, self.count)
+                      _duration(self.obj, points), self.count)
 
 
 def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Generator
@@ -264,6 +269,40 @@ def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Ge
             if attempt < BISECTIONS:
                 high, low = (share, low) if better else (high, share)
     return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+
+
+def _shortcut(obj: Objective, check: _Checker, found: Detour, rng: np.random.Generator
+              ) -> Detour:
+    """
+    Return ``found`` with corners cut, as a sampling planner's path simplification does.
+
+    ``SHORTCUTS`` times: a point a on one segment and b on a later one (at random fractions
+    of the way between their ends) replace the points between them, where the motion gets
+    shorter by ``CUT_GAIN`` of its duration (durations first, then the checks), has at most
+    ``MOST_VIAS`` via points and the segments to a, from a to b and from b are free.
+    """
+    points = [obj.planned_start, *(v[:obj.arm.planned] for v in found.vias), found.x]
+    best = found
+    for _ in range(SHORTCUTS):
+        if check.spent(check.count + 3):
+            break
+        i, j = sorted(rng.choice(len(points) - 1, 2, replace=False))
+        u, w = rng.uniform(size=2)
+        a = points[i] + u * (points[i + 1] - points[i])
+        b = points[j] + w * (points[j + 1] - points[j])
+        trial = (*points[:i + 1], a, b, *points[j + 1:])
+        if (len(trial) - 2 > MOST_VIAS
+                or _duration(obj, trial) >= (1.0 - CUT_GAIN) * best.duration):
+            continue
+        cut = check.through_points(trial)
+        if cut is not None:
+            best, points = cut, list(trial)
+    return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+
+
+def _duration(obj: Objective, points: tuple[np.ndarray, ...]) -> float:
+    """Return the duration of the motion through ``points``, at rest at each."""
+    return sum(float(_durations(obj, p[None], q[None])[0, 0]) for p, q in zip(points, points[1:]))
 
 
 def _shortened(obj: Objective, via: np.ndarray, moved: np.ndarray, before: np.ndarray,

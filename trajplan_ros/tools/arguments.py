@@ -122,7 +122,7 @@ def add_collision_arguments(parser: argparse.ArgumentParser) -> None:
                        help=f'least clearance in metres (default {DEFAULT_PADDING})')
     group.add_argument('--detours', action=argparse.BooleanOptionalAction, default=True,
                        help='where no direct motion is free, plan the fastest free motion '
-                            'found through one or two via points (default on)')
+                            'found through up to four via points (default on)')
 
 
 def package_share(package: str) -> str:
