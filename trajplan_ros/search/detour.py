@@ -59,14 +59,13 @@ class Detour:
     vias: tuple[np.ndarray, ...]         # every joint's angles at each via point
     clearance: Clearance                 # the least clearance over the segments
     duration: float                      # s, the segments' durations summed
-    checked: int                         # segments checked
 
 
 def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
            goals: np.ndarray, rng: np.random.Generator, tolerance: float,
            stop: Callable[[], object] | None = None) -> Detour | None:
     """
-    Return the fastest motion start -> v -> joint goal found with both segments free, or None.
+    Return the fastest motion found from the start through via points to a joint goal, or None.
 
     ``goals`` (K, planned): the goal's reached joint solutions, fastest first; ``law``: the
     whole arm's time law; ``tolerance``: the largest error (m) of a reached goal; ``stop``:
@@ -227,7 +226,7 @@ class _Checker:
         """Return the motion through ``points`` (planned joints) whose segments keep clear so."""
         least = min(segments, key=lambda c: c.clearance)
         return Detour(points[-1], tuple(self.obj.full(v)[0] for v in points[1:-1]), least,
-                      _duration(self.obj, points), self.count)
+                      _duration(self.obj, points))
 
 
 def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Generator
@@ -255,8 +254,7 @@ def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Ge
                 share = 0.5 * (low + high)
                 via = _shortened(obj, anchor, anchor, points[k - 1], points[k + 1], share)
             else:
-                extra = (best.duration - _durations(obj, points[k - 1][None],
-                                                    points[k + 1][None])[0, 0])
+                extra = best.duration - _time(obj, points[k - 1], points[k + 1])
                 moved = points[k] + (extra * obj.law.velocity
                                      * rng.standard_normal(obj.arm.planned))
                 via = _shortened(obj, points[k], np.clip(moved, obj.lower, obj.upper),
@@ -268,7 +266,7 @@ def _tightened(obj: Objective, check: _Checker, found: Detour, rng: np.random.Ge
                 best, points[k] = trial, via
             if attempt < BISECTIONS:
                 high, low = (share, low) if better else (high, share)
-    return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+    return best
 
 
 def _shortcut(obj: Objective, check: _Checker, found: Detour, rng: np.random.Generator
@@ -297,12 +295,17 @@ def _shortcut(obj: Objective, check: _Checker, found: Detour, rng: np.random.Gen
         cut = check.through_points(trial)
         if cut is not None:
             best, points = cut, list(trial)
-    return Detour(best.x, best.vias, best.clearance, best.duration, check.count)
+    return best
 
 
 def _duration(obj: Objective, points: tuple[np.ndarray, ...]) -> float:
     """Return the duration of the motion through ``points``, at rest at each."""
-    return sum(float(_durations(obj, p[None], q[None])[0, 0]) for p, q in zip(points, points[1:]))
+    return sum(_time(obj, p, q) for p, q in zip(points, points[1:]))
+
+
+def _time(obj: Objective, a: np.ndarray, b: np.ndarray) -> float:
+    """Return the duration of the direct motion from a to b (planned joints)."""
+    return float(_durations(obj, a[None], b[None])[0, 0])
 
 
 def _shortened(obj: Objective, via: np.ndarray, moved: np.ndarray, before: np.ndarray,
@@ -313,9 +316,7 @@ def _shortened(obj: Objective, via: np.ndarray, moved: np.ndarray, before: np.nd
     The total is T(before, after) plus ``share`` of the time the motion through ``via`` takes
     beyond it, split between the two segments as through ``via``; None where the box is empty.
     """
-    t1 = float(_durations(obj, before[None], via[None])[0, 0])
-    t2 = float(_durations(obj, via[None], after[None])[0, 0])
-    direct = float(_durations(obj, before[None], after[None])[0, 0])
+    t1, t2, direct = _time(obj, before, via), _time(obj, via, after), _time(obj, before, after)
     total = direct + share * (t1 + t2 - direct)
     return _clipped(obj, moved, before, after, total * t1 / (t1 + t2), total * t2 / (t1 + t2))
 
