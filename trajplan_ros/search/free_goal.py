@@ -23,7 +23,8 @@ from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import Linearisation, polish
 
-__all__ = ['free_joint_goal', 'project_onto_goal', 'reached_goals', 'SearchOutcome']
+__all__ = ['distinct_goals', 'free_joint_goal', 'project_onto_goal', 'reached_goals',
+           'SearchOutcome']
 
 #: Random joint vectors the search projects onto the goal's solutions in one round (a goal's
 #: free solutions can be few, and a redundant arm's solutions many).
@@ -67,7 +68,11 @@ def reached_goals(obj: Objective, rng: np.random.Generator, tolerance: float) ->
     projected = project_onto_goal(obj, drawn)
     x = np.vstack((projected, polish(obj, projected)))
     x = x[obj.errors(obj.tool(x)) <= tolerance]
-    x = x[np.argsort(obj.motion_time(x), kind='stable')]
+    return distinct_goals(x[np.argsort(obj.motion_time(x), kind='stable')])
+
+
+def distinct_goals(x: np.ndarray) -> np.ndarray:
+    """Return the rows of x (fastest first) without those within ``SAME_GOAL`` of a faster."""
     _, first = np.unique(np.round(x / SAME_GOAL), axis=0, return_index=True)
     return x[np.sort(first)]
 

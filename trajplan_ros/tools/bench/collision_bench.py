@@ -30,6 +30,7 @@ from pathlib import Path
 import sys
 import tempfile
 import time
+from typing import Any, Callable
 
 import numpy as np
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld, DEFAULT_PADDING
@@ -49,8 +50,8 @@ from trajplan_ros.tools.arguments import positive_count
 from trajplan_ros.tools.bench.clearance import IndependentCheck
 from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
 
-__all__ = ['add_parser', 'BenchArm', 'draw_goal', 'draw_scene', 'every_millisecond',
-           'goal_solutions']
+__all__ = ['add_parser', 'add_scene_arguments', 'BenchArm', 'bench_seed', 'draw_goal',
+           'draw_scene', 'every_millisecond', 'goal_solutions', 'measure_scenes']
 
 #: Where each arm starts (free of itself), and its SRDF below robots_dir() if it has one.
 STARTS = {'so101': ((0.0, 0.0, 0.0, 0.0, 0.0), None),
@@ -232,16 +233,13 @@ def _report(rows: list[Row]) -> str:
     return '\n'.join(answers + [''] + times)
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
-    """Add ``trajplan bench-collisions``."""
-    p = sub.add_parser('bench-collisions', help='measure the collision targets',
-                       description=__doc__.split('\n\n')[0].strip())
+def add_scene_arguments(p: argparse.ArgumentParser, scenes: int, brute: str) -> None:
+    """Add the flags of a bench over drawn scenes (``scenes``: its default; ``brute``: help)."""
     p.add_argument('--arms', nargs='+', default=['so101', 'ur5', 'panda', 'paper'],
                    choices=sorted(STARTS))
-    p.add_argument('--scenes', type=positive_count, default=10, help='scenes per arm')
+    p.add_argument('--scenes', type=positive_count, default=scenes, help='scenes per arm')
     p.add_argument('--goals', type=positive_count, default=5, help='goals per scene')
-    p.add_argument('--brute', type=positive_count, default=400,
-                   help='joint solutions of the brute-force search per goal')
+    p.add_argument('--brute', type=positive_count, default=400, help=brute)
     p.add_argument('--angular-velocity', '--omega', type=float, default=1.0, metavar='RAD_S',
                    help='servo angular velocity omega, rad/s')
     p.add_argument('--padding', type=float, default=DEFAULT_PADDING)
@@ -250,19 +248,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--rows', type=Path, default=None,
                    help="write every goal's measurements to this file (JSON lines)")
     p.add_argument('--seed', type=int, default=None, help='default: a fresh one, printed')
-    p.set_defaults(run=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run the bench and print its table."""
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
-    print(f'bench-collisions --arms {" ".join(args.arms)} --seed {seed} --scenes '
-          f'{args.scenes} --goals {args.goals} --brute {args.brute} --angular-velocity '
-          f'{args.angular_velocity} --padding {args.padding} --obstacles {args.obstacles}',
-          flush=True)
-    prepare()
-    rng = np.random.default_rng(seed)
-    rows = []
+def bench_seed(args: argparse.Namespace) -> int:
+    """Return ``--seed``, else a fresh one."""
+    return args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
+
+
+def measure_scenes(args: argparse.Namespace, rng: np.random.Generator,
+                   measure: Callable[..., Any],
+                   note: Callable[[list[Any]], str] | None = None) -> list[Any]:
+    """
+    Return ``measure``'s row for every goal of every arm's scenes, drawn from ``rng``.
+
+    ``measure(bench, world, check, goal, args, seed, scene)`` returns a dataclass; each row is
+    appended to ``--rows`` as it comes. Progress goes to stderr, each scene's line ending with
+    ``note(the arm's rows)`` if given.
+    """
+    rows: list[Any] = []
     with tempfile.TemporaryDirectory() as folder:
         for name in args.arms:
             clock = time.perf_counter()
@@ -273,11 +276,33 @@ def run(args: argparse.Namespace) -> int:
                 world = draw_scene(bench, rng, args.padding, args.obstacles)
                 check = IndependentCheck(world, bench.urdf)
                 for _ in range(args.goals):
-                    rows.append(_measure(bench, world, check, draw_goal(bench, world, rng), args,
-                                         int(rng.integers(2**31)), scene))
+                    rows.append(measure(bench, world, check, draw_goal(bench, world, rng), args,
+                                        int(rng.integers(2**31)), scene))
                     if args.rows is not None:
                         with args.rows.open('a', encoding='utf-8') as out:
                             out.write(json.dumps(asdict(rows[-1])) + '\n')
-                print(f'{name}: scene {scene + 1}/{args.scenes}', file=sys.stderr, flush=True)
+                extra = '' if note is None else f', {note([r for r in rows if r.arm == name])}'
+                print(f'{name}: scene {scene + 1}/{args.scenes}{extra}', file=sys.stderr,
+                      flush=True)
+    return rows
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``trajplan bench-collisions``."""
+    p = sub.add_parser('bench-collisions', help='measure the collision targets',
+                       description=__doc__.split('\n\n')[0].strip())
+    add_scene_arguments(p, 10, 'joint solutions of the brute-force search per goal')
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the bench and print its table."""
+    seed = bench_seed(args)
+    print(f'bench-collisions --arms {" ".join(args.arms)} --seed {seed} --scenes '
+          f'{args.scenes} --goals {args.goals} --brute {args.brute} --angular-velocity '
+          f'{args.angular_velocity} --padding {args.padding} --obstacles {args.obstacles}',
+          flush=True)
+    prepare()
+    rows = measure_scenes(args, np.random.default_rng(seed), _measure)
     print(_report(rows))
     return 0

@@ -27,24 +27,20 @@ against the same goal's plan with detours off.
 from __future__ import annotations
 
 import argparse
-from dataclasses import asdict, dataclass, field
-import json
-from pathlib import Path
-import sys
-import tempfile
+from dataclasses import dataclass, field
 import time
 
 import numpy as np
-from trajplan_ros.collision.distances import CollisionWorld, DEFAULT_PADDING
+from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.free_motion import check_motion, START_TOLERANCE, StartLimits
 from trajplan_ros.motion.trajectory import path_trajectory
 from trajplan_ros.planning.planner import plan, PlanRequest, PlanResult, PlanStatus, prepare
-from trajplan_ros.search.free_goal import SAME_GOAL
-from trajplan_ros.tools.arguments import positive_count
+from trajplan_ros.search.free_goal import distinct_goals
 from trajplan_ros.tools.bench import ompl_peer
 from trajplan_ros.tools.bench.clearance import IndependentCheck
-from trajplan_ros.tools.bench.collision_bench import (BenchArm, draw_goal, draw_scene,
-                                                      every_millisecond, goal_solutions, STARTS)
+from trajplan_ros.tools.bench.collision_bench import (add_scene_arguments, bench_seed,
+                                                      BenchArm, every_millisecond,
+                                                      goal_solutions, measure_scenes)
 
 __all__ = ['add_parser']
 
@@ -73,12 +69,6 @@ class Row:
     ompl_broken: list[str] = field(default_factory=list)
 
 
-def _distinct(x: np.ndarray) -> np.ndarray:
-    """Return the rows of x (fastest first) without those within ``SAME_GOAL`` of a faster."""
-    _, first = np.unique(np.round(x / SAME_GOAL), axis=0, return_index=True)
-    return x[np.sort(first)]
-
-
 def _blocked(row: Row, bench: BenchArm, world: CollisionWorld, check: IndependentCheck,
              request: PlanRequest, args: argparse.Namespace) -> None:
     """Plan a blocked goal with detours and with OMPL; check both by python-fcl."""
@@ -96,7 +86,7 @@ def _blocked(row: Row, bench: BenchArm, world: CollisionWorld, check: Independen
     def free(a: np.ndarray, b: np.ndarray) -> bool:
         return check_motion(world, a, b, law, timing, False, limits).free
 
-    clear = [x for x in _distinct(solutions) if free(obj.full(x)[0], obj.full(x)[0])]
+    clear = [x for x in distinct_goals(solutions) if free(obj.full(x)[0], obj.full(x)[0])]
     row.clear_goals = len(clear)
     direct = [x for x in clear if free(bench.start, obj.full(x)[0])]
     if direct:
@@ -188,52 +178,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan bench-detours``."""
     p = sub.add_parser('bench-detours', help='measure motions around obstacles against OMPL',
                        description=__doc__.split('\n\n')[0].strip())
-    p.add_argument('--arms', nargs='+', default=['so101', 'ur5', 'panda', 'paper'],
-                   choices=sorted(STARTS))
-    p.add_argument('--scenes', type=positive_count, default=20, help='scenes per arm')
-    p.add_argument('--goals', type=positive_count, default=5, help='goals per scene')
-    p.add_argument('--brute', type=positive_count, default=400,
-                   help="joint solutions drawn per blocked goal: OMPL's joint goals")
+    add_scene_arguments(p, 20, "joint solutions drawn per blocked goal: OMPL's joint goals")
     p.add_argument('--ompl-time', type=float, default=10.0, metavar='S',
                    help="RRTConnect's budget per goal (the judge of reachable)")
     p.add_argument('--ompl-simplify', type=float, default=1.0, metavar='S',
                    help="the budget of OMPL's path simplification")
-    p.add_argument('--angular-velocity', '--omega', type=float, default=1.0, metavar='RAD_S',
-                   help='servo angular velocity omega, rad/s')
-    p.add_argument('--padding', type=float, default=DEFAULT_PADDING)
-    p.add_argument('--obstacles', type=positive_count, default=10,
-                   help='most obstacles per scene besides the table')
-    p.add_argument('--rows', type=Path, default=None,
-                   help="write every goal's measurements to this file (JSON lines)")
-    p.add_argument('--seed', type=int, default=None, help='default: a fresh one, printed')
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the bench and print its tables."""
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
+    seed = bench_seed(args)
     print(f'bench-detours --arms {" ".join(args.arms)} --seed {seed} --scenes {args.scenes} '
           f'--goals {args.goals} --brute {args.brute} --ompl-time {args.ompl_time} '
           f'--ompl-simplify {args.ompl_simplify} --angular-velocity {args.angular_velocity} '
           f'--padding {args.padding} --obstacles {args.obstacles}', flush=True)
     prepare()
     ompl_peer.seed(seed)
-    rng = np.random.default_rng(seed)
-    rows = []
-    with tempfile.TemporaryDirectory() as folder:
-        for name in args.arms:
-            bench = BenchArm.load(name, Path(folder))
-            for scene in range(args.scenes):
-                world = draw_scene(bench, rng, args.padding, args.obstacles)
-                check = IndependentCheck(world, bench.urdf)
-                for _ in range(args.goals):
-                    rows.append(_measure(bench, world, check, draw_goal(bench, world, rng), args,
-                                         int(rng.integers(2**31)), scene))
-                    if args.rows is not None:
-                        with args.rows.open('a', encoding='utf-8') as out:
-                            out.write(json.dumps(asdict(rows[-1])) + '\n')
-                print(f'{name}: scene {scene + 1}/{args.scenes}, blocked so far '
-                      f'{sum(r.blocked for r in rows if r.arm == name)}', file=sys.stderr,
-                      flush=True)
+    rows = measure_scenes(args, np.random.default_rng(seed), _measure,
+                          lambda mine: f'blocked so far {sum(r.blocked for r in mine)}')
     print(_report(rows))
     return 0
