@@ -57,6 +57,7 @@ setup(
         'console_scripts': [
             'trajplan = trajplan_ros.tools.cli:main',
             'planner_node = trajplan_ros.ros.node:main',
+            'demo_controller = trajplan_ros.ros.demo_controller:main',
         ],
     },
 )

@@ -29,8 +29,9 @@ import sys
 from typing import Any, Iterator, Mapping
 
 from declared_dependencies import (DISTRIBUTION_KEYS, install_requires, is_python_key,
-                                   KEY_DISTRIBUTIONS, package_dependencies, package_keys, REPO,
-                                   ROS_DISTRIBUTIONS, RUN_TAGS, setup_argument)
+                                   KEY_DISTRIBUTIONS, NOT_ON_PYPI, package_dependencies,
+                                   package_keys, REPO, ROS_DISTRIBUTIONS, RUN_TAGS,
+                                   setup_argument)
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 from packaging.version import Version
@@ -144,7 +145,13 @@ def ament_prefixes() -> list[Path]:
 
 
 def is_ros_package(name: str) -> bool:
-    """Whether ``name`` is a ROS package registered in the ament index (as ``ros2 pkg`` sees)."""
+    """
+    Whether ``name`` is a ROS package registered in the ament index (as ``ros2 pkg`` sees).
+
+    A package with no wheel (``NOT_ON_PYPI``) is one if Jazzy releases it.
+    """
+    if name in NOT_ON_PYPI:
+        return name in jazzy_packages('ubuntu', 'noble')
     return any((prefix / 'share/ament_index/resource_index/packages' / name).is_file()
                for prefix in ament_prefixes())
 

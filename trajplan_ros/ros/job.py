@@ -53,6 +53,7 @@ class Outcome:
     motion_time_s: float | None = None       # of a published trajectory
     clearance: tuple[float, str] | None = None   # least clearance (m) and where (collisions)
     via_points: int | None = None            # via points of a published trajectory
+    start: np.ndarray | None = None          # the joint angles it was planned from
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -123,9 +124,11 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                        plan_time_s=timed)
     traj = result.trajectory(sample_period=s.sample_period)
     path = path_msg(s.arm, traj, header) if job.is_call else None
-    sent = 'answered, not sent (compute_plan)' if job.plan_only else 'published'
+    sent = ('answered, not sent (compute_plan)' if job.plan_only else
+            {'topic': 'published', 'action': 'sending', 'none': 'not sent (execution none):'}[
+                s.execution])
     return Outcome(True, f'{where}: {result.message}; {took}; {sent} {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,
                    plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance,
-                   via_points=len(result.via_points))
+                   via_points=len(result.via_points), start=start.q)

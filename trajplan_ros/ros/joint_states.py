@@ -86,6 +86,11 @@ class JointStateMonitor:
         with self._lock:
             self._last_end = dict(zip(names, map(float, angles)))
 
+    def measured(self, names: Sequence[str]) -> dict[str, float]:
+        """Return the newest joint_states angle of each of ``names`` that has one."""
+        with self._lock:
+            return {name: self._measured[name] for name in names if name in self._measured}
+
     def start(self, names: Sequence[str], defaults: Sequence[float]) -> PlanStart:
         """Per joint: joint_states, else the last trajectory's end, else ``defaults``."""
         with self._lock:

@@ -19,10 +19,13 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
   its current joint angles (``kinematics.frames``); any other frame is refused, naming the
   frames it knows.
-* ``joint_trajectory`` (out), ``planned_path`` (nav_msgs/msg/Path, out, for RViz),
-  ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
+* ``joint_trajectory`` (out; with ``execution: topic``), ``planned_path`` (nav_msgs/msg/Path,
+  out, for RViz), ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
 * ``plan_results`` (diagnostic_msgs/msg/DiagnosticStatus, out): how each goal and call ended
   and why, with what the caller sent (``ros.outcomes``).
+* ``follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory, client; with
+  ``execution: action``): each motion is sent as a goal there instead, and how the controller
+  ends it goes to ``plan_results`` (``ros.execution``); ``execution: none`` sends nothing.
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
 * ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal.
 * ``robot_description`` (std_msgs/msg/String, in; reliable, transient local, depth 1, as
@@ -42,6 +45,9 @@ Concurrency, all of it:
 * The main thread waits for SIGINT or SIGTERM (rclpy's own signal handling is off), then
   ``shut_down`` stops intake, stops the running plan, answers every waiting call with an empty
   plan, and only then the context is shut down.
+* With ``execution: action``, the worker hands each planned motion to ``ActionExecution``
+  (a deque and a guard condition); its action client, futures and timer run on the executor
+  thread, and ``shut_down`` cancels the executing goal through it before the context ends.
 * Each job's outcome goes to ``plan_results`` from whichever of the three threads ends it (a
   refusal or a superseded goal on the executor, a plan on the worker, shutdown on the main
   thread); ``Job.reported``, set under the answer lock, lets only the first through.
@@ -93,6 +99,7 @@ from trajplan_ros.planning import prepare
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
+from trajplan_ros.ros.execution import action_type, ActionExecution, Motion, start_mismatch
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
@@ -208,6 +215,8 @@ class PlannerNode(Node):
         self.create_subscription(MarkerArray, 'collision_objects', self._on_collision_objects,
                                  KEEP_ALL)
         self._publish_markers(self._settings)
+        self._execution: ActionExecution | None = None    # created when execution is action
+        self._use_execution(self._settings)
         calls = ReentrantCallbackGroup()
         self.create_service(GetPlan, 'plan_trajectory', self._on_plan_call, qos_profile=KEEP_ALL,
                             callback_group=calls)
@@ -230,6 +239,8 @@ class PlannerNode(Node):
         try:
             Settings.from_parameters(values, self._topic_description, strict_start=strict,
                                      topic_semantic=self._topic_semantic)
+            if values['execution'] == 'action' and self._execution is None:
+                action_type()
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             return SetParametersResult(successful=False, reason=_reason(exc))
         return SetParametersResult(successful=True)
@@ -238,9 +249,16 @@ class PlannerNode(Node):
         self._use(Settings.from_parameters(self._parameter_values(), self._topic_description,
                                            strict_start=False,
                                            topic_semantic=self._topic_semantic))
+        self._use_execution(self._settings)
         shown = ', '.join(f'{p.name}=<{len(p.value)} characters>' if p.name == 'robot_description'
                           else f'{p.name}={p.value}' for p in params)
         self.get_logger().info(f'parameters set for the next plan: {shown}')
+
+    def _use_execution(self, settings: Settings) -> None:
+        """Create the action client the first time execution is action (ValueError: no way)."""
+        if settings.execution == 'action' and self._execution is None:
+            self._execution = ActionExecution(self, self._report_execution,
+                                              self._states.measured)
 
     def _on_description(self, msg: String) -> None:
         """
@@ -500,21 +518,53 @@ class PlannerNode(Node):
                 return
             if not job.is_call:
                 self._counters.add('goals_planned' if outcome.succeeded else 'goals_failed')
-            if outcome.succeeded and not job.plan_only:
-                traj = outcome.trajectory
-                self._trajectories.publish(trajectory_msg(traj))
-                if self._paths.get_subscription_count():     # a long path costs time to convert
-                    s = outcome.settings
-                    self._paths.publish(outcome.path or path_msg(s.arm, traj,
-                                                                 self._header(s.base_frame)))
-                self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
+            execution = outcome.settings.execution if outcome.succeeded else 'none'
+            if not job.plan_only and execution != 'none':
+                self._send(job, outcome)
             # after the trajectory: a caller told "succeeded" finds it published
             self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s,
                                   outcome.clearance, outcome.via_points)
+            if not job.plan_only and execution == 'action':
+                self._execute(job, outcome)
         if outcome.succeeded:
             self._log.info(outcome.log)
         else:
             self._log.warning(outcome.log)
+
+    def _send(self, job: Job, outcome: jobs.Outcome) -> None:
+        """Publish a planned motion's trajectory (topic) and its tool path, if watched."""
+        traj, s = outcome.trajectory, outcome.settings
+        if s.execution == 'topic':
+            self._trajectories.publish(trajectory_msg(traj))
+        if self._paths.get_subscription_count():     # a long path costs time to convert
+            self._paths.publish(outcome.path or path_msg(s.arm, traj, self._header(s.base_frame)))
+        self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
+
+    def _execute(self, job: Job, outcome: jobs.Outcome) -> None:
+        """Send a planned motion to the controller's action, unless its start is off."""
+        traj, s = outcome.trajectory, outcome.settings
+        names = list(traj.joint_names)
+        problem = start_mismatch(names, outcome.start, self._states.measured(names),
+                                 s.start_tolerance)
+        if problem:
+            self._report_execution(job, 'refused', f'not sent: {problem}')
+            return
+        self._execution.submit(Motion(job, trajectory_msg(traj),
+                                      dict(zip(names, traj.positions[-1].tolist())),
+                                      traj.duration, s.controller_timeout))
+
+    def _report_execution(self, job: Job, status: str, message: str,
+                          execution: outcomes.Execution | None = None) -> None:
+        """Publish and log one execution status of ``job`` (from the worker or executor)."""
+        self._results.publish(outcomes.outcome_status(
+            f'{self.get_fully_qualified_name()}: {job.label}',
+            'service call' if job.is_call else 'goal', job.stamp, job.goal, status, message,
+            execution=execution or outcomes.Execution()))
+        line = f'{job.label} {describe_goal(job.goal)} m: execution: {status}: {message}'
+        if status in ('accepted', 'executed', 'preempted', 'shut_down'):
+            self._log.info(line)
+        else:
+            self._log.warning(line)
 
     def _mark_counted(self, job: Job) -> bool:
         """Mark ``job`` as logged and counted; False if it already was."""
@@ -577,6 +627,9 @@ class PlannerNode(Node):
         current = self._current
         if current is not None:
             self._give_up(current)                       # still in one long iteration
+        if self._execution is not None:                  # cancel what the controller executes
+            if not self._execution.shut_down(2 * SHUTDOWN_STEP_S):
+                self.get_logger().warning('the controller did not confirm the cancel in time')
         answered = threading.Event()
         for _ in range(int(SHUTDOWN_STEP_S / 0.01)):     # the answers go out on the executor
             snapshot = self._counters.snapshot()

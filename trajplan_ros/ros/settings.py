@@ -177,6 +177,19 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('max_planning_time', 1.0,
                   'longest a plan may search, s; past it the plan ends as timed_out',
                   bounds=(1e-3, 60.0)),
+    ParameterSpec('execution', 'topic',
+                  'how a planned motion reaches the controller: topic (published on '
+                  'joint_trajectory), action (a FollowJointTrajectory goal to '
+                  'follow_joint_trajectory, with its result on plan_results; needs '
+                  'control_msgs) or none (planned and answered, never sent)',
+                  choices=('topic', 'action', 'none')),
+    ParameterSpec('start_tolerance', 0.05,
+                  "execution action: largest difference between a plan's start and the newest "
+                  'joint_states, per joint, for the motion to be sent, rad; 0: not checked',
+                  bounds=(0.0, 3.2)),
+    ParameterSpec('controller_timeout', 5.0,
+                  'execution action: how long the controller may take to appear and to answer '
+                  "a goal, and to finish past the motion's duration, s", bounds=(0.01, 600.0)),
     ParameterSpec('max_trajectory_points', 10000,
                   'most points a published trajectory may have; a plan needing more is refused',
                   bounds=(2, 50000)),
@@ -211,6 +224,12 @@ class Settings:
     start_ignored: bool = False
     #: How a pose goal's orientation is used: 'ignore', 'approach' (its z axis) or 'pose'.
     goal_orientation: str = 'ignore'
+    #: How a planned motion reaches the controller: 'topic', 'action' or 'none'.
+    execution: str = 'topic'
+    #: execution action: the largest start difference to joint_states, rad (0: unchecked).
+    start_tolerance: float = 0.05
+    #: execution action: how long the controller may take, s.
+    controller_timeout: float = 5.0
 
     @property
     def arm(self) -> ArmModel:
@@ -282,6 +301,8 @@ class Settings:
                    max_trajectory_points=values['max_trajectory_points'],
                    max_queued_calls=values['max_queued_calls'],
                    goal_orientation=values['goal_orientation'],
+                   execution=values['execution'], start_tolerance=values['start_tolerance'],
+                   controller_timeout=values['controller_timeout'],
                    diagnostic_period=values['diagnostic_updater.period'])
 
 

@@ -8,9 +8,11 @@ They do what ``ros2 service call plan_trajectory nav_msgs/srv/GetPlan ...`` and
 command line (it is not on PyPI). Both subscribe to the node's ``plan_results`` before they
 send, so that a goal the node does not plan comes back with its reason (on stderr, exit 1): a
 call is found there by its request's ``goal.header.stamp``, the client's clock at sending, a
-goal by its point. Both use the ROS environment as it is (``ROS_DOMAIN_ID``,
-``ROS_AUTOMATIC_DISCOVERY_RANGE``, namespaces through the names given) and import rclpy only
-when they run, so ``trajplan`` works without ROS 2.
+goal by its point. With ``--wait-execution`` they then wait for the execution statuses of the
+same request (a node whose ``execution`` is ``action``) and print how the controller ended
+the motion (exit 1 unless it was executed). Both use the ROS environment as it is
+(``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``, namespaces through the names given) and
+import rclpy only when they run, so ``trajplan`` works without ROS 2.
 """
 from __future__ import annotations
 
@@ -91,18 +93,40 @@ def _next(box: queue.Queue[Any], timeout: float, what: str,
 
 
 def _outcome(box: queue.Queue[Any], timeout: float, what: str,
-             mine: Callable[[dict[str, str]], bool]) -> tuple[bool, str]:
+             mine: Callable[[dict[str, str]], bool], stage: str = 'plan') -> dict[str, str]:
     """
-    Wait for the node's outcome of the caller's request; return (planned, its line).
+    Wait for the node's status of the caller's request at ``stage``; return its values.
 
-    ``mine`` tells the caller's outcome by its values (``ros.outcomes``).
+    ``mine`` tells the caller's statuses by their values (``ros.outcomes``); the values get
+    the status's message as ``message``.
     """
     from trajplan_ros.ros.outcomes import outcome_values, TOPIC
 
-    msg = _next(box, timeout, f'outcome of {what} on {TOPIC}',
-                lambda m: mine(outcome_values(m)))
-    values = outcome_values(msg)
-    return values['status'] == 'succeeded', f"{values['status']}: {msg.message}"
+    msg = _next(box, timeout, f'{stage} status of {what} on {TOPIC}',
+                lambda m: mine(v := outcome_values(m)) and v.get('stage', 'plan') == stage)
+    return {**outcome_values(msg), 'message': msg.message}
+
+
+def _line(values: dict[str, str]) -> str:
+    return f"{values['status']}: {values['message']}"
+
+
+def _execution(box: queue.Queue[Any], timeout: float, what: str,
+               mine: Callable[[dict[str, str]], bool], plan: dict[str, str]) -> int:
+    """Print how the controller ended the planned motion of ``plan``: 0 executed, else 1."""
+    from trajplan_ros.ros.outcomes import TERMINAL
+
+    bound = timeout + float(plan['motion_time_s'] or 0)
+    try:
+        while (values := _outcome(box, bound, what, mine, 'execution'))['status'] not in TERMINAL:
+            print(f"controller: {values['message']}")
+    except TimeoutError as exc:
+        raise TimeoutError(f"{exc} (is the node's execution parameter action?)") from None
+    if values['status'] != 'executed':
+        print(f'trajplan: not executed: {_line(values)}', file=sys.stderr)
+        return 1
+    print(f"executed: {values['message']}")
+    return 0
 
 
 def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
@@ -113,13 +137,14 @@ def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
 
 def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeout: float,
                  trajectory_topic: str | None, results_topic: str | None = None,
-                 frame: str = '') -> int:
+                 frame: str = '', wait_execution: bool = False) -> int:
     """
     Call the planning service with ``goal`` and print the answer; 0 for a plan, 1 for none.
 
     ``frame``: the goal's frame_id (empty: the node's base frame). With ``trajectory_topic``,
     also wait for the trajectory the node publishes there and print it (the node answers
-    first, then publishes).
+    first, then publishes). With ``wait_execution``, then wait for the controller's end of
+    the motion and print it: 1 unless executed.
     """
     from diagnostic_msgs.msg import DiagnosticStatus
     from nav_msgs.srv import GetPlan
@@ -139,15 +164,21 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
     stamp = outcomes.describe_stamp((request.goal.header.stamp.sec,
                                      request.goal.header.stamp.nanosec))
     path = ros.call(GetPlan, service, request, timeout).plan
+
+    def mine(v: dict[str, str]) -> bool:
+        return v['request'] == 'service call' and v['stamp'] == stamp
+
     if not path.poses:
-        _, line = _outcome(results, timeout, 'the call',
-                           lambda v: v['request'] == 'service call' and v['stamp'] == stamp)
-        print(f'trajplan: not planned: {line}', file=sys.stderr)
+        print(f"trajplan: not planned: {_line(_outcome(results, timeout, 'the call', mine))}",
+              file=sys.stderr)
         return 1
     if box is not None:
         print_trajectory(_next(box, timeout, f'JointTrajectory on {trajectory_topic}'),
                          trajectory_topic)
     print_path(path, goal, frame)
+    if wait_execution:
+        return _execution(results, timeout, 'the call', mine,
+                          _outcome(results, timeout, 'the call', mine))
     return 0
 
 
@@ -160,7 +191,7 @@ def _run_call(args: argparse.Namespace) -> int:
         return call_planner(ros, _goal(args), service=service,
                             tolerance=args.tolerance, timeout=args.timeout,
                             trajectory_topic=args.trajectory, results_topic=args.results,
-                            frame=args.frame)
+                            frame=args.frame, wait_execution=args.wait_execution)
 
 
 def _run_goal(args: argparse.Namespace) -> int:
@@ -182,14 +213,16 @@ def _run_goal(args: argparse.Namespace) -> int:
             results.get_nowait()
         ros.publish(Point, args.topic, Point(x=x, y=y, z=z), timeout=args.timeout)
         print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
-        planned, line = _outcome(results, args.timeout, 'the goal', _is_point(goal))
-        if not planned:
-            print(f'trajplan: not planned: {line}', file=sys.stderr)
+        plan = _outcome(results, args.timeout, 'the goal', _is_point(goal))
+        if plan['status'] != 'succeeded':
+            print(f'trajplan: not planned: {_line(plan)}', file=sys.stderr)
             return 1
-        print(line)
+        print(_line(plan))
         if box is not None:
             print_trajectory(_next(box, args.timeout, f'JointTrajectory on {args.trajectory}'),
                              args.trajectory)
+        if args.wait_execution:
+            return _execution(results, args.timeout, 'the goal', _is_point(goal), plan)
     return 0
 
 
@@ -213,6 +246,9 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument('--trajectory', metavar='TOPIC', nargs='?', const='joint_trajectory',
                    help='also print the JointTrajectory the node publishes (on TOPIC, default '
                         'joint_trajectory)')
+    p.add_argument('--wait-execution', action='store_true',
+                   help='then wait for the controller to end the motion (a node with execution '
+                        'action) and print how; exit status 1 unless it was executed')
     p.add_argument('--results', metavar='TOPIC',
                    help="the node's plan_results topic (default: plan_results beside the "
                         'service or goal topic)')

@@ -1,0 +1,279 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Execution through the controller's FollowJointTrajectory action (parameter ``execution: action``).
+
+Each planned motion is sent as a goal to ``follow_joint_trajectory`` (a relative name: remap it
+to the controller's, e.g. ``/arm_controller/follow_joint_trajectory``), and what the controller
+makes of it goes to ``plan_results`` as the execution statuses of ``ros.outcomes``. A motion
+passes through these states:
+
+* waiting: planned, not yet sent, because no server is there yet (at most ``controller_timeout``
+  s, then ``no_controller``), or a newer motion replaces it (``preempted``, never sent);
+* sent: the goal is with the controller; no answer within ``controller_timeout`` s ends it as
+  ``timed_out``; rejected: ``rejected``;
+* accepted: executing; it ends with the controller's result (``executed``, or the result code's
+  name with its ``error_string``), ``preempted`` (a newer motion cancels it, then is sent, as
+  joint_trajectory_controller itself would), ``shut_down`` (cancelled at Ctrl-C), or
+  ``timed_out`` (not finished ``controller_timeout`` s after the motion's duration: cancelled).
+
+Every end carries the largest difference between the newest joint_states and the planned goal.
+Concurrency: the worker thread hands motions over with ``submit`` (a deque and a guard
+condition) and the main thread calls ``shut_down``; everything else, the action client and its
+futures included, runs on the executor thread. control_msgs is imported only here, and only
+when the node executes through the action (``action_type`` says how to get it).
+"""
+from __future__ import annotations
+
+import collections
+from dataclasses import dataclass
+import functools
+import math
+import threading
+import time
+from typing import Any, Callable, Mapping, Sequence
+
+from action_msgs.msg import GoalStatus
+from rclpy.action import ActionClient
+from rclpy.node import Node
+from trajectory_msgs.msg import JointTrajectory
+from trajplan_ros.ros.mailbox import Job
+from trajplan_ros.ros.outcomes import Execution
+
+
+__all__ = ['ACTION', 'ActionExecution', 'action_type', 'Motion', 'position_error',
+           'result_status', 'start_mismatch']
+
+#: The action's name, relative to the node's namespace.
+ACTION = 'follow_joint_trajectory'
+#: FollowJointTrajectory's Result.error_code values, by the status name they end in.
+RESULT_CODES = {0: 'executed', -1: 'invalid_goal', -2: 'invalid_joints',
+                -3: 'old_header_timestamp', -4: 'path_tolerance_violated',
+                -5: 'goal_tolerance_violated'}
+#: How often waiting motions and deadlines are looked at, s.
+TICK_S = 0.05
+#: How to get control_msgs, for a refusal of ``execution: action``.
+HOW_TO = ('with ROS 2 from apt: sudo apt install ros-jazzy-control-msgs; with ROS 2 from PyPI: '
+          'build it with build_ros_interfaces.sh and export the PYTHONPATH and LD_LIBRARY_PATH '
+          'it prints (README, "Executing through the controller")')
+
+
+def action_type() -> type:
+    """Return control_msgs' FollowJointTrajectory; ValueError with how to get it if it fails."""
+    try:
+        from control_msgs.action import FollowJointTrajectory
+        from rclpy.type_support import check_for_type_support
+
+        check_for_type_support(FollowJointTrajectory)
+    except Exception as exc:  # noqa: BLE001 - not installed, or its C libraries do not load
+        raise ValueError(f'execution action needs control_msgs, which does not load here '
+                         f'({type(exc).__name__}: {str(exc).splitlines()[0]}): '
+                         f'{HOW_TO}') from None
+    return FollowJointTrajectory
+
+
+def start_mismatch(names: Sequence[str], planned: Sequence[float],
+                   measured: Mapping[str, float], tolerance: float) -> str | None:
+    """
+    Return why a plan from ``planned`` may not be sent while joint_states say ``measured``.
+
+    None when every joint is within ``tolerance`` rad (0: not checked).
+    """
+    if tolerance <= 0:
+        return None
+    missing = [n for n in names if n not in measured]
+    if missing:
+        return (f"no joint_states for {', '.join(missing)}: the controller's state is not "
+                'known, so the start cannot be checked (start_tolerance 0 sends unchecked)')
+    now = [measured[n] for n in names]
+    worst = max(range(len(names)), key=lambda j: abs(now[j] - planned[j]))
+    gap = abs(now[worst] - planned[worst])
+    if gap <= tolerance:
+        return None
+    return (f'the plan starts {gap:.4g} rad from joint_states on {names[worst]} (start_tolerance '
+            f'{tolerance:g} rad): planned from ({", ".join(f"{q:.4f}" for q in planned)}), '
+            f'joint_states ({", ".join(f"{q:.4f}" for q in now)}) rad')
+
+
+def position_error(goal: Mapping[str, float],
+                   measured: Mapping[str, float]) -> tuple[float | None, str]:
+    """Return the largest |joint_states - goal| (rad) and its joint; (None, '') if not known."""
+    if not goal or any(n not in measured for n in goal):
+        return None, ''
+    name = max(goal, key=lambda n: abs(measured[n] - goal[n]))
+    return abs(measured[name] - goal[name]), name
+
+
+def result_status(goal_status: int, error_code: int, preempted: bool,
+                  stopping: bool) -> str:
+    """Name the end of an accepted goal from its GoalStatus and its result's error_code."""
+    if preempted and goal_status in (GoalStatus.STATUS_CANCELED, GoalStatus.STATUS_ABORTED):
+        return 'preempted'                    # cancelled, or aborted for the newer goal
+    if goal_status == GoalStatus.STATUS_CANCELED:
+        return 'shut_down' if stopping else 'cancelled'
+    if goal_status == GoalStatus.STATUS_SUCCEEDED and error_code == 0:
+        return 'executed'
+    return RESULT_CODES.get(error_code, 'aborted') if error_code else 'aborted'
+
+
+def describe_end(what: str, error: float | None, joint: str, error_string: str) -> str:
+    """Write an execution's end for a person: what happened, where the arm was, and why."""
+    where = '' if error is None else f' ({error:.3g} rad from the goal on joint {joint})'
+    return what + where + (f'; controller: {error_string}' if error_string else '')
+
+
+@dataclass
+class Motion:
+    """One planned motion on its way to the controller."""
+
+    job: Job
+    trajectory: JointTrajectory
+    goal: dict[str, float]            # the planned final joint angles, by name
+    duration: float                   # s
+    timeout: float                    # controller_timeout when it was planned, s
+    deadline: float = math.inf        # monotonic time its current state gives up
+    state: str = 'waiting'            # waiting, sent, accepted
+    handle: Any = None                # the ClientGoalHandle once accepted
+    preempted_by: str = ''            # the job whose motion replaces this one
+
+
+class ActionExecution:
+    """Send planned motions to a FollowJointTrajectory server and report how each ended."""
+
+    def __init__(self, node: Node, report: Callable[[Job, str, str, Execution], None],
+                 measured: Callable[[Sequence[str]], Mapping[str, float]]) -> None:
+        """
+        Create the action client on ``node``.
+
+        ``report(job, status, message, execution)`` publishes an execution status;
+        ``measured(names)`` gives the newest joint_states angles.
+        """
+        self._action = action_type()
+        self._report, self._measured = report, measured
+        self._client = ActionClient(node, self._action, ACTION)
+        self._name = node.resolve_service_name(ACTION)     # remapped, in the namespace
+        self._handed: collections.deque[Motion] = collections.deque()   # worker -> executor
+        self._waiting: Motion | None = None
+        self._sent: list[Motion] = []
+        self._stopping = False
+        self._settled = threading.Event()
+        self._take = node.create_guard_condition(self._take_handed)
+        self._stop = node.create_guard_condition(self._cancel_all)
+        node.create_timer(TICK_S, self._tick)
+
+    # --- any thread ---------------------------------------------------------------------------
+
+    def submit(self, motion: Motion) -> None:
+        """Hand a planned motion over: it is sent, preempting the one executing."""
+        self._handed.append(motion)
+        self._take.trigger()
+
+    def shut_down(self, timeout: float) -> bool:
+        """Cancel what is executing; wait up to ``timeout`` s for the cancels. True if done."""
+        self._settled.clear()
+        self._stop.trigger()
+        return self._settled.wait(timeout)
+
+    # --- executor thread ----------------------------------------------------------------------
+
+    def _take_handed(self) -> None:
+        while self._handed:
+            motion = self._handed.popleft()
+            if self._stopping:
+                self._end(motion, 'shut_down', 'not sent: shutting down')
+                continue
+            if self._waiting is not None:
+                self._end(self._waiting, 'preempted',
+                          f'not sent: {motion.job.label} was planned before it could be')
+            motion.deadline = time.monotonic() + motion.timeout
+            self._waiting = motion
+        self._send_waiting()
+
+    def _send_waiting(self) -> None:
+        """Send the waiting motion if the server is there, cancelling the ones it preempts."""
+        motion = self._waiting
+        if motion is None or not self._client.server_is_ready():
+            return
+        self._waiting = None
+        for older in self._sent:
+            older.preempted_by = motion.job.label
+            if older.handle is not None:
+                older.handle.cancel_goal_async()
+        motion.state, motion.deadline = 'sent', time.monotonic() + motion.timeout
+        self._sent.append(motion)
+        future = self._client.send_goal_async(self._action.Goal(trajectory=motion.trajectory))
+        future.add_done_callback(functools.partial(self._on_response, motion))
+
+    def _on_response(self, motion: Motion, future: Any) -> None:
+        handle = future.result()
+        if motion not in self._sent:                  # ended meanwhile (timed out, shut down)
+            if handle.accepted:
+                handle.cancel_goal_async()
+            return
+        if not handle.accepted:
+            self._end(motion, 'rejected', 'the controller rejected the goal')
+            return
+        motion.handle, motion.state = handle, 'accepted'
+        motion.deadline = time.monotonic() + motion.duration + motion.timeout
+        if motion.preempted_by or self._stopping:
+            handle.cancel_goal_async()
+        self._report(motion.job, 'accepted', 'the controller accepted the goal', Execution())
+        handle.get_result_async().add_done_callback(functools.partial(self._on_result, motion))
+
+    def _on_result(self, motion: Motion, future: Any) -> None:
+        if motion not in self._sent:
+            return
+        response = future.result()
+        code, said = response.result.error_code, response.result.error_string
+        status = result_status(response.status, code, bool(motion.preempted_by), self._stopping)
+        error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
+        what = {'executed': 'reached the goal', 'shut_down': 'cancelled at shutdown',
+                'preempted': f'cancelled for {motion.preempted_by}'}.get(
+                    status, status.replace('_', ' '))
+        self._end(motion, status, describe_end(what, error, joint, said),
+                  Execution(code, said, error, joint))
+
+    def _tick(self) -> None:
+        """Send a motion whose server has appeared; end the ones past their deadline."""
+        self._send_waiting()
+        now = time.monotonic()
+        motion = self._waiting
+        if motion is not None and now > motion.deadline:
+            self._waiting = None
+            self._end(motion, 'no_controller', f'no FollowJointTrajectory server on '
+                      f'{self._name} within {motion.timeout:g} s (remap '
+                      f"{ACTION} to the controller's action, e.g. "
+                      f'/arm_controller/{ACTION})')
+        for motion in [m for m in self._sent if now > m.deadline]:
+            if motion.state == 'sent':
+                reason = f'the controller did not answer the goal within {motion.timeout:g} s'
+            else:
+                motion.handle.cancel_goal_async()
+                reason = (f'the controller had not finished {motion.timeout:g} s after the '
+                          f"motion's {motion.duration:.3f} s; cancelled")
+            error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
+            self._end(motion, 'timed_out', describe_end(reason, error, joint, ''),
+                      Execution(None, '', error, joint))
+
+    def _cancel_all(self) -> None:
+        """At shutdown: end the waiting motion, cancel the sent ones (their results end them)."""
+        self._stopping = True
+        if self._waiting is not None:
+            self._end(self._waiting, 'shut_down', 'not sent: shutting down')
+            self._waiting = None
+        for motion in self._sent:
+            if motion.handle is not None:
+                motion.handle.cancel_goal_async()
+        self._settle()
+
+    def _end(self, motion: Motion, status: str, message: str,
+             execution: Execution | None = None) -> None:
+        if motion in self._sent:
+            self._sent.remove(motion)
+        self._report(motion.job, status, message, execution or Execution())
+        self._settle()
+
+    def _settle(self) -> None:
+        """At shutdown, say so once nothing sent is left."""
+        if self._stopping and not self._sent:
+            self._settled.set()
