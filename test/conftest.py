@@ -85,6 +85,56 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
     return Install(root / 'install' / PACKAGE)
 
 
+# --- control_msgs, for execution through FollowJointTrajectory --------------------------------
+
+#: The shared interface sources and their build script (control_msgs is not on PyPI).
+ROS_INTERFACES = Path(os.environ.get('TRAJPLAN_ROS_INTERFACES',
+                                     REPO.parent / 'shared' / 'ros_interfaces'))
+#: Where they are built, once per venv: the script installs the rosidl generators into the venv
+#: and rewrites their CMake files, which it cannot do twice.
+INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
+#: Loads FollowJointTrajectory as the node does, type support and all.
+_LOAD_ACTION = 'from trajplan_ros.ros.execution import action_type; action_type()'
+
+
+def _loads_action(env: dict[str, str]) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, '-c', _LOAD_ACTION], env=env, capture_output=True,
+                          text=True, timeout=120)
+
+
+@pytest.fixture(scope='session')
+def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
+    """
+    Give an environment in which control_msgs loads; skip where it cannot be had.
+
+    An importable control_msgs is used as it is. Else it is built from ``ROS_INTERFACES`` with
+    its build_ros_interfaces.sh into ``INTERFACES_BUILD`` (about 1.5 min, once per venv); a
+    clone without those sources skips with that reason.
+    """
+    if _loads_action(ros_env).returncode == 0:
+        return dict(ros_env)
+    install = INTERFACES_BUILD / 'install'
+    if not (install / 'control_msgs').is_dir():
+        script = ROS_INTERFACES / 'build_ros_interfaces.sh'
+        if not script.is_file():
+            pytest.skip(f'control_msgs does not load and {script} is not there to build it '
+                        '(set TRAJPLAN_ROS_INTERFACES to its folder)')
+        done = subprocess.run(['bash', str(script), str(Path(sys.prefix)), str(ROS_INTERFACES),
+                               str(INTERFACES_BUILD)], capture_output=True, text=True,
+                              timeout=1200)
+        assert done.returncode == 0, f'{script} failed:\n{done.stderr[-3000:]}'
+    python = f'python{sys.version_info.major}.{sys.version_info.minor}'
+    paths = {'PYTHONPATH': [str(p) for p in install.glob(f'*/lib/{python}/site-packages')],
+             'LD_LIBRARY_PATH': [str(p) for p in install.glob('*/lib')]}
+    env = dict(ros_env)
+    for name, found in paths.items():
+        env[name] = os.pathsep.join(filter(None, [*found, ros_env.get(name)]))
+    loaded = _loads_action(env)
+    assert loaded.returncode == 0, f'control_msgs built in {install} does not load: ' \
+        f'{loaded.stderr[-2000:]}'
+    return env
+
+
 # --- the node process ---------------------------------------------------------------------------
 
 @pytest.fixture(scope='session')
@@ -93,14 +143,18 @@ def start_node(colcon_install: Install,
     """
     Give a factory that runs the installed planner_node: ``start(*ros_args, ready=True)``.
 
-    With ``ready`` it waits for the node's "ready" log line. Every node started is stopped
-    (SIGINT, then SIGKILL) at the end of the session if a test has not stopped it.
+    With ``ready`` it waits for the node's "ready" log line. ``env`` replaces the test
+    process's environment, ``executable`` names another of the package's (demo_controller).
+    Every node started is stopped (SIGINT, then SIGKILL) at the end of the session if a test
+    has not stopped it.
     """
     started: list[NodeProcess] = []
 
-    def start(*ros_args: str, ready: bool = True) -> NodeProcess:
-        argv = [str(colcon_install.executable)] + (['--ros-args', *ros_args] if ros_args else [])
-        node = NodeProcess(argv, colcon_install.env(os.environ))
+    def start(*ros_args: str, ready: bool = True, env: dict[str, str] | None = None,
+              executable: str = 'planner_node') -> NodeProcess:
+        argv = [str(colcon_install.executable.with_name(executable))] + (
+            ['--ros-args', *ros_args] if ros_args else [])
+        node = NodeProcess(argv, colcon_install.env(env or os.environ))
         started.append(node)
         if ready:
             node.wait_for(r'trajplan\]: ready: ')

@@ -17,8 +17,8 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
 __all__ = ['DISTRIBUTION_KEYS', 'install_requires', 'is_python_key', 'KEY_DISTRIBUTIONS',
-           'NOT_ON_PYPI', 'package_dependencies', 'package_keys', 'REPO', 'ROS_DISTRIBUTIONS', 'RUN_TAGS',
-           'setup_argument']
+           'NOT_ON_PYPI', 'package_dependencies', 'package_keys', 'REPO', 'ROS_DISTRIBUTIONS',
+           'RUN_TAGS', 'setup_argument']
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -9,6 +9,8 @@ trajectory is followed in time, by linear interpolation between its points, from
 joints are when it is accepted (``header.stamp`` zero: start now). One goal executes at a time:
 a new goal preempts the one executing (aborted), a cancel request stops the arm where it is.
 A goal naming a joint it does not have is rejected, as joint_trajectory_controller does.
+Its parameters ``fail``, ``fail_after`` and ``goal_error`` may change while it runs (each goal
+takes them as they are when it is accepted).
 
 ``fail`` makes it fail as a real controller can, with the result codes of
 control_msgs/action/FollowJointTrajectory: ``reject`` (the goal is rejected), ``invalid_goal``,
@@ -25,11 +27,12 @@ import time
 from typing import Any
 
 import numpy as np
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from trajplan_ros.kinematics import paper_arm
@@ -59,6 +62,9 @@ class _Following:
     positions: np.ndarray              # (len(times), len(joints))
     started: float
     done: Future
+    fail: str                          # the controller's fail, fail_after and goal_error
+    fail_after: float                  # when the goal was accepted
+    goal_error: float
 
 
 class DemoController(Node):
@@ -79,46 +85,59 @@ class DemoController(Node):
         for name, (default, text) in p.items():
             self.declare_parameter(name, default, ParameterDescriptor(description=text))
         value = {name: self.get_parameter(name).value for name in p}
-        if value['fail'] not in FAILURES:
-            raise ValueError(f"fail must be one of {', '.join(map(repr, FAILURES))}, "
-                             f"got {value['fail']!r}")
+        problem = _fail_problem(value['fail'])
+        if problem:
+            raise ValueError(problem)
+        self.add_on_set_parameters_callback(self._check)
         self._names = list(value['joints'])
         if len(value['positions']) != len(self._names):
             raise ValueError(f"positions has {len(value['positions'])} angles for "
                              f'{len(self._names)} joints')
         self._q = np.array(value['positions'], dtype=float)
-        self._fail, self._fail_after = value['fail'], value['fail_after']
-        self._goal_error = value['goal_error']
         self._action = action_type()
         self._active: _Following | None = None
         self._states = self.create_publisher(JointState, 'joint_states', 10)
         self._server = ActionServer(self, self._action, ACTION, self._execute,
                                     goal_callback=self._on_goal,
+                                    handle_accepted_callback=self._on_accepted,
                                     cancel_callback=lambda _: CancelResponse.ACCEPT)
         self.create_timer(1.0 / value['rate'], self._tick)
-        self.get_logger().info(f"ready: joints {', '.join(self._names)}"
-                               + (f', failing with {self._fail}' if self._fail else ''))
+        self.get_logger().info(f"ready: joints {', '.join(self._names)}")
+
+    def _check(self, params: list[Parameter]) -> SetParametersResult:
+        """Refuse a ``fail`` it does not know (the others are read at each goal)."""
+        problem = next(filter(None, (_fail_problem(p.value) for p in params
+                                     if p.name == 'fail')), None)
+        return SetParametersResult(successful=problem is None, reason=problem or '')
+
+    def _setting(self, name: str) -> Any:
+        return self.get_parameter(name).value
 
     def _on_goal(self, goal: Any) -> GoalResponse:
         unknown = sorted(set(goal.trajectory.joint_names) - set(self._names))
-        if self._fail == 'reject' or unknown or not goal.trajectory.points:
+        if self._setting('fail') == 'reject' or unknown or not goal.trajectory.points:
             why = (f"unknown joints {', '.join(unknown)}" if unknown else
                    'no points' if not goal.trajectory.points else 'fail reject')
             self.get_logger().info(f'goal rejected: {why}')
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
-    async def _execute(self, handle: Any) -> Any:
-        """Follow one accepted goal; return its result when the control loop ends it."""
+    def _on_accepted(self, handle: Any) -> None:
+        """End the goal executing (preempted), then execute the new one: one at a time."""
         if self._active is not None:
             self._end(self._active, 'abort', 0, 'preempted by a new goal')
+        handle.execute()
+
+    async def _execute(self, handle: Any) -> Any:
+        """Follow one accepted goal; return its result when the control loop ends it."""
         traj = handle.request.trajectory
         joints = np.array([self._names.index(n) for n in traj.joint_names])
         times = [0.0] + [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec
                          for p in traj.points]
         positions = [self._q[joints]] + [np.array(p.positions) for p in traj.points]
         following = _Following(handle, joints, np.array(times), np.array(positions),
-                               time.monotonic(), Future())
+                               time.monotonic(), Future(), self._setting('fail'),
+                               self._setting('fail_after'), self._setting('goal_error'))
         self._active = following
         self.get_logger().info(f'goal accepted: {len(traj.points)} points over '
                                f'{times[-1]:.3f} s')
@@ -129,18 +148,18 @@ class DemoController(Node):
         a = self._active
         if a is not None and a.handle.is_cancel_requested:
             self._end(a, 'canceled', 0, 'cancelled on request')
-        elif a is not None and self._fail != 'stall':
+        elif a is not None and a.fail != 'stall':
             t = time.monotonic() - a.started
-            if self._fail in ('invalid_goal', 'invalid_joints', 'old_header_timestamp'):
-                self._end(a, 'abort', *_ABORTS[self._fail])
-            elif self._fail == 'path_tolerance' and t >= self._fail_after:
+            if a.fail in ('invalid_goal', 'invalid_joints', 'old_header_timestamp'):
+                self._end(a, 'abort', *_ABORTS[a.fail])
+            elif a.fail == 'path_tolerance' and t >= a.fail_after:
                 self._end(a, 'abort', *_ABORTS['path_tolerance'])
             else:
                 self._q[a.joints] = [np.interp(t, a.times, a.positions[:, j])
                                      for j in range(len(a.joints))]
                 if t >= a.times[-1]:
-                    if self._fail == 'goal_tolerance':
-                        self._q[a.joints[-1]] += self._goal_error
+                    if a.fail == 'goal_tolerance':
+                        self._q[a.joints[-1]] += a.goal_error
                         self._end(a, 'abort', *_ABORTS['goal_tolerance'])
                     else:
                         self._end(a, 'succeed', 0, '')
@@ -157,6 +176,13 @@ class DemoController(Node):
                                + (f': {error_string}' if error_string else ''))
         following.done.set_result(self._action.Result(error_code=code,
                                                       error_string=error_string))
+
+
+def _fail_problem(fail: str) -> str | None:
+    """Return why ``fail`` is refused, or None."""
+    if fail in FAILURES:
+        return None
+    return f"fail must be one of {', '.join(map(repr, FAILURES))}, got {fail!r}"
 
 
 def main(args: list[str] | None = None) -> int:

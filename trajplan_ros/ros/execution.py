@@ -9,7 +9,9 @@ makes of it goes to ``plan_results`` as the execution statuses of ``ros.outcomes
 passes through these states:
 
 * waiting: planned, not yet sent, because no server is there yet (at most ``controller_timeout``
-  s, then ``no_controller``), or a newer motion replaces it (``preempted``, never sent);
+  s, then ``no_controller``), or a newer motion replaces it (``preempted``, never sent); when
+  the server is there, a plan whose start is more than ``start_tolerance`` from the newest
+  joint_states is ``refused``;
 * sent: the goal is with the controller; no answer within ``controller_timeout`` s ends it as
   ``timed_out``; rejected: ``rejected``;
 * accepted: executing; it ends with the controller's result (``executed``, or the result code's
@@ -129,8 +131,10 @@ class Motion:
     job: Job
     trajectory: JointTrajectory
     goal: dict[str, float]            # the planned final joint angles, by name
+    start: list[float]                # the joint angles it was planned from, in goal's order
     duration: float                   # s
     timeout: float                    # controller_timeout when it was planned, s
+    start_tolerance: float            # start_tolerance when it was planned, rad
     deadline: float = math.inf        # monotonic time its current state gives up
     state: str = 'waiting'            # waiting, sent, accepted
     handle: Any = None                # the ClientGoalHandle once accepted
@@ -190,11 +194,22 @@ class ActionExecution:
         self._send_waiting()
 
     def _send_waiting(self) -> None:
-        """Send the waiting motion if the server is there, cancelling the ones it preempts."""
+        """
+        Send the waiting motion if the server is there, cancelling the ones it preempts.
+
+        Unless its start is off the newest joint_states: then it is refused, and what executes
+        goes on.
+        """
         motion = self._waiting
         if motion is None or not self._client.server_is_ready():
             return
         self._waiting = None
+        names = list(motion.goal)
+        problem = start_mismatch(names, motion.start, self._measured(names),
+                                 motion.start_tolerance)
+        if problem:
+            self._end(motion, 'refused', f'not sent: {problem}')
+            return
         for older in self._sent:
             older.preempted_by = motion.job.label
             if older.handle is not None:

@@ -55,6 +55,7 @@ class JointStateMonitor:
                  clock: Callable[[], float] = time.monotonic) -> None:
         self._warn, self._period, self._clock = warn, repeat_period, clock
         self._lock = threading.Lock()
+        self._updated = threading.Condition(self._lock)
         self._measured: dict[str, float] = {}
         self._last_end: dict[str, float] = {}
         #: problem kind -> how many messages had it
@@ -74,6 +75,7 @@ class JointStateMonitor:
         ours = set(arm_joints)
         with self._lock:
             self._measured.update({n: float(q) for n, q in zip(names, positions) if n in ours})
+            self._updated.notify_all()
 
     def forget(self) -> None:
         """Drop every known joint angle (the arm changed: names may now mean other joints)."""
@@ -90,6 +92,12 @@ class JointStateMonitor:
         """Return the newest joint_states angle of each of ``names`` that has one."""
         with self._lock:
             return {name: self._measured[name] for name in names if name in self._measured}
+
+    def wait_for(self, names: Sequence[str], timeout: float) -> bool:
+        """Wait up to ``timeout`` s until every one of ``names`` has an angle; True if so."""
+        with self._updated:
+            return self._updated.wait_for(lambda: all(n in self._measured for n in names),
+                                          timeout)
 
     def start(self, names: Sequence[str], defaults: Sequence[float]) -> PlanStart:
         """Per joint: joint_states, else the last trajectory's end, else ``defaults``."""

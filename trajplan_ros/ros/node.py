@@ -99,7 +99,7 @@ from trajplan_ros.planning import prepare
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
-from trajplan_ros.ros.execution import action_type, ActionExecution, Motion, start_mismatch
+from trajplan_ros.ros.execution import action_type, ActionExecution, Motion
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
@@ -501,6 +501,8 @@ class PlannerNode(Node):
     def _plan(self, job: Job) -> jobs.Outcome:
         """Plan one job into its messages and log line."""
         s = self._settings
+        if s.execution == 'action':         # the controller's state: it is what moves first
+            self._states.wait_for(s.arm.joint_names, s.controller_timeout)
         start = self._states.start(s.arm.joint_names, s.start)
         self._log.debug(f'planning {job.label} {describe_goal(job.goal)} m')
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
@@ -538,20 +540,16 @@ class PlannerNode(Node):
             self._trajectories.publish(trajectory_msg(traj))
         if self._paths.get_subscription_count():     # a long path costs time to convert
             self._paths.publish(outcome.path or path_msg(s.arm, traj, self._header(s.base_frame)))
-        self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
+        if s.execution == 'topic':               # the action's controller tells its state
+            self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
 
     def _execute(self, job: Job, outcome: jobs.Outcome) -> None:
-        """Send a planned motion to the controller's action, unless its start is off."""
+        """Hand a planned motion to the controller's action (``ros.execution``)."""
         traj, s = outcome.trajectory, outcome.settings
-        names = list(traj.joint_names)
-        problem = start_mismatch(names, outcome.start, self._states.measured(names),
-                                 s.start_tolerance)
-        if problem:
-            self._report_execution(job, 'refused', f'not sent: {problem}')
-            return
         self._execution.submit(Motion(job, trajectory_msg(traj),
-                                      dict(zip(names, traj.positions[-1].tolist())),
-                                      traj.duration, s.controller_timeout))
+                                      dict(zip(traj.joint_names, traj.positions[-1].tolist())),
+                                      outcome.start.tolist(), traj.duration,
+                                      s.controller_timeout, s.start_tolerance))
 
     def _report_execution(self, job: Job, status: str, message: str,
                           execution: outcomes.Execution | None = None) -> None:
