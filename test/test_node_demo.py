@@ -4,7 +4,8 @@
 ``trajplan demo`` end to end.
 
 It starts planner_node, plans the paper's example through the service, prints the plan and
-the trajectory, and stops the node it started.
+the trajectory, and stops the node it started; where control_msgs loads, it executes two goals
+through demo_controller, the second from where the first ended.
 """
 from __future__ import annotations
 
@@ -14,7 +15,10 @@ import subprocess
 import sys
 
 from node_under_test import Install, LIVENESS_S
+import numpy as np
 import pytest
+from trajplan_ros import plan
+from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.node_process import COMPILE_BOUND_S
 
 pytestmark = pytest.mark.system
@@ -46,3 +50,26 @@ def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, 
     pid = int(re.search(r'stopped planner_node \(pid (\d+), exit code 0\)', out).group(1))
     assert not os.path.exists(f'/proc/{pid}'), 'the demo left its node running'
     assert 'Traceback' not in out + done.stderr
+
+
+def test_demo_closes_the_loop_where_control_msgs_loads(colcon_install: Install,
+                                                      control_msgs_env: dict[str, str],
+                                                      tmp_path) -> None:
+    env = colcon_install.env(control_msgs_env)
+    env['PATH'] = os.pathsep.join([str(colcon_install.executable.parent), env.get('PATH', '')])
+    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path,
+                          env=env, capture_output=True, text=True,
+                          timeout=COMPILE_BOUND_S + 3 * LIVENESS_S)
+    out = done.stdout
+    assert done.returncode == 0, out + done.stderr
+    assert re.search(r'^started \S*/demo_controller \(pid \d+\)', out, re.M), out
+    assert re.search(r'^started \S*/planner_node --ros-args -p execution:=action', out, re.M)
+    assert out.count('execution: accepted') == 2 and out.count('executed: reached the goal') == 2
+    # the second plan starts where the first motion ended, as joint_states told the node
+    second = re.search(r'service call #2 \S+ \S+ \S+ m from q = \(([^)]*)\)', out).group(1)
+    first_goal = plan(tuple(PAPER_TARGET), seed=0).joint_goal
+    assert np.allclose([float(q) for q in second.split(',')], first_goal, atol=1e-5), out
+    ends = [re.search(r'stopped (\S+) \(pid (\d+), exit code 0\)', line)
+            for line in out.splitlines() if line.startswith('stopped ')]
+    assert [m.group(1) for m in ends if m] == ['planner_node', 'demo_controller'], out
+    assert not [m for m in ends if os.path.exists(f'/proc/{m.group(2)}')]

@@ -106,7 +106,7 @@ def test_every_result_reaches_plan_results_and_the_call(
         assert f'trajplan: not executed: {status}: ' in err and said in err, err
     else:
         assert code == 0, err
-        assert 'controller: the controller accepted the goal' in out
+        assert 'execution: accepted' in out
         assert f'executed: {said} (0 rad from the goal on joint ' in out, out
 
 

@@ -119,7 +119,7 @@ def _execution(box: queue.Queue[Any], timeout: float, what: str,
     bound = timeout + float(plan['motion_time_s'] or 0)
     try:
         while (values := _outcome(box, bound, what, mine, 'execution'))['status'] not in TERMINAL:
-            print(f"controller: {values['message']}")
+            print(f"execution: {values['status']}")
     except TimeoutError as exc:
         raise TimeoutError(f"{exc} (is the node's execution parameter action?)") from None
     if values['status'] != 'executed':

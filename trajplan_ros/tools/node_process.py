@@ -40,18 +40,19 @@ def wait_until(predicate: Callable[[], bool], timeout: float = TIMEOUT_S,
         tick.wait(0.02)
 
 
-def planner_command() -> list[str]:
+def planner_command(executable: str = 'planner_node') -> list[str]:
     """
-    Return the command that starts the node.
+    Return the command that starts the node (or the package's other ``executable``).
 
-    That is ``planner_node`` beside this Python (a venv's bin), else on PATH, else
-    ``python -m trajplan_ros.ros.node`` (a source checkout).
+    That is the executable beside this Python (a venv's bin), else on PATH, else
+    ``python -m trajplan_ros.ros.<module>`` (a source checkout).
     """
-    beside = Path(sys.executable).with_name('planner_node')
+    beside = Path(sys.executable).with_name(executable)
     if beside.is_file() and os.access(beside, os.X_OK):
         return [str(beside)]
-    found = shutil.which('planner_node')
-    return [found] if found else [sys.executable, '-m', 'trajplan_ros.ros.node']
+    found = shutil.which(executable)
+    module = {'planner_node': 'node'}.get(executable, executable)
+    return [found] if found else [sys.executable, '-m', f'trajplan_ros.ros.{module}']
 
 
 def ros_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
