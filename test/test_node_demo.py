@@ -52,9 +52,8 @@ def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, 
     assert 'Traceback' not in out + done.stderr
 
 
-def test_demo_closes_the_loop_where_control_msgs_loads(colcon_install: Install,
-                                                      control_msgs_env: dict[str, str],
-                                                      tmp_path) -> None:
+def test_demo_closes_the_loop_where_control_msgs_loads(
+        colcon_install: Install, control_msgs_env: dict[str, str], tmp_path) -> None:
     env = colcon_install.env(control_msgs_env)
     env['PATH'] = os.pathsep.join([str(colcon_install.executable.parent), env.get('PATH', '')])
     done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path,
