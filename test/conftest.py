@@ -56,7 +56,8 @@ def empty_kernel_cache(tmp_path: Path) -> Path:
 
 
 def pytest_sessionfinish() -> None:
-    """Remove the run's cache of compiled kernels."""
+    """Remove the run's cache of compiled kernels; stop a build of control_msgs still going."""
+    _InterfacesBuild.stop()
     if _KERNEL_CACHE is not None:
         shutil.rmtree(_KERNEL_CACHE, ignore_errors=True)
 
@@ -102,27 +103,66 @@ def _loads_action(env: dict[str, str]) -> subprocess.CompletedProcess:
                           text=True, timeout=120)
 
 
+class _InterfacesBuild:
+    """The build of control_msgs, started in the background as soon as the run is collected."""
+
+    proc: subprocess.Popen | None = None
+    log: Path | None = None
+
+    @classmethod
+    def start(cls) -> None:
+        """Start the build where it is needed and possible (the fixture says why otherwise)."""
+        script = ROS_INTERFACES / 'build_ros_interfaces.sh'
+        if ((INTERFACES_BUILD / 'install' / 'control_msgs').is_dir() or not script.is_file()
+                or _loads_action(dict(os.environ)).returncode == 0):
+            return
+        INTERFACES_BUILD.mkdir(parents=True, exist_ok=True)
+        cls.log = INTERFACES_BUILD / 'build.log'
+        with open(cls.log, 'w', encoding='utf-8') as log:
+            cls.proc = subprocess.Popen(['bash', str(script), sys.prefix, str(ROS_INTERFACES),
+                                         str(INTERFACES_BUILD)], stdout=log, stderr=log,
+                                        stdin=subprocess.DEVNULL)
+
+    @classmethod
+    def wait(cls) -> None:
+        """Wait for a started build; fail with the end of its log if it failed."""
+        if cls.proc is None:
+            return
+        code = cls.proc.wait(timeout=1200)
+        log = cls.log.read_text(encoding='utf-8', errors='replace')
+        assert code == 0, f'{ROS_INTERFACES}/build_ros_interfaces.sh failed:\n{log[-3000:]}'
+
+    @classmethod
+    def stop(cls) -> None:
+        """Stop a build still running when the run ends (by its PID)."""
+        if cls.proc is not None and cls.proc.poll() is None:
+            cls.proc.kill()
+            cls.proc.wait()
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Start building control_msgs while the tests that do not need it run."""
+    if any('control_msgs_env' in getattr(item, 'fixturenames', ()) for item in session.items):
+        _InterfacesBuild.start()
+
+
 @pytest.fixture(scope='session')
 def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
     """
     Give an environment in which control_msgs loads; skip where it cannot be had.
 
     An importable control_msgs is used as it is. Else it is built from ``ROS_INTERFACES`` with
-    its build_ros_interfaces.sh into ``INTERFACES_BUILD`` (about 1.5 min, once per venv); a
-    clone without those sources skips with that reason.
+    its build_ros_interfaces.sh into ``INTERFACES_BUILD`` (about 1.5 min, once per venv, begun
+    when the run is collected); a clone without those sources skips with that reason.
     """
     if _loads_action(ros_env).returncode == 0:
         return dict(ros_env)
+    _InterfacesBuild.wait()
     install = INTERFACES_BUILD / 'install'
     if not (install / 'control_msgs').is_dir():
-        script = ROS_INTERFACES / 'build_ros_interfaces.sh'
-        if not script.is_file():
-            pytest.skip(f'control_msgs does not load and {script} is not there to build it '
-                        '(set TRAJPLAN_ROS_INTERFACES to its folder)')
-        done = subprocess.run(['bash', str(script), str(Path(sys.prefix)), str(ROS_INTERFACES),
-                               str(INTERFACES_BUILD)], capture_output=True, text=True,
-                              timeout=1200)
-        assert done.returncode == 0, f'{script} failed:\n{done.stderr[-3000:]}'
+        pytest.skip(f'control_msgs does not load and {ROS_INTERFACES} has no '
+                    'build_ros_interfaces.sh to build it (set TRAJPLAN_ROS_INTERFACES to the '
+                    'folder of the interface sources)')
     python = f'python{sys.version_info.major}.{sys.version_info.minor}'
     paths = {'PYTHONPATH': [str(p) for p in install.glob(f'*/lib/{python}/site-packages')],
              'LD_LIBRARY_PATH': [str(p) for p in install.glob('*/lib')]}
