@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import tempfile
 
 # One cache of compiled kernels for the whole run, before anything imports numba: the source
@@ -94,6 +95,8 @@ ROS_INTERFACES = Path(os.environ.get('TRAJPLAN_ROS_INTERFACES',
 #: Where they are built, once per venv: the script installs the rosidl generators into the venv
 #: and rewrites their CMake files, which it cannot do twice.
 INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
+#: Written when the build succeeded (a build stopped halfway leaves its folder behind).
+BUILT = INTERFACES_BUILD / 'built'
 #: Loads FollowJointTrajectory as the node does, type support and all.
 _LOAD_ACTION = 'from trajplan_ros.ros.execution import action_type; action_type()'
 
@@ -113,7 +116,7 @@ class _InterfacesBuild:
     def start(cls) -> None:
         """Start the build where it is needed and possible (the fixture says why otherwise)."""
         script = ROS_INTERFACES / 'build_ros_interfaces.sh'
-        if ((INTERFACES_BUILD / 'install' / 'control_msgs').is_dir() or not script.is_file()
+        if (BUILT.is_file() or not script.is_file()
                 or _loads_action(dict(os.environ)).returncode == 0):
             return
         INTERFACES_BUILD.mkdir(parents=True, exist_ok=True)
@@ -121,7 +124,7 @@ class _InterfacesBuild:
         with open(cls.log, 'w', encoding='utf-8') as log:
             cls.proc = subprocess.Popen(['bash', str(script), sys.prefix, str(ROS_INTERFACES),
                                          str(INTERFACES_BUILD)], stdout=log, stderr=log,
-                                        stdin=subprocess.DEVNULL)
+                                        stdin=subprocess.DEVNULL, start_new_session=True)
 
     @classmethod
     def wait(cls) -> None:
@@ -131,12 +134,13 @@ class _InterfacesBuild:
         code = cls.proc.wait(timeout=1200)
         log = cls.log.read_text(encoding='utf-8', errors='replace')
         assert code == 0, f'{ROS_INTERFACES}/build_ros_interfaces.sh failed:\n{log[-3000:]}'
+        BUILT.write_text(log.splitlines()[-1] + '\n', encoding='utf-8')
 
     @classmethod
     def stop(cls) -> None:
         """Stop a build still running when the run ends (by its PID)."""
         if cls.proc is not None and cls.proc.poll() is None:
-            cls.proc.kill()
+            os.killpg(cls.proc.pid, signal.SIGKILL)      # its session: colcon, cmake and g++
             cls.proc.wait()
 
 
@@ -159,7 +163,7 @@ def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
         return dict(ros_env)
     _InterfacesBuild.wait()
     install = INTERFACES_BUILD / 'install'
-    if not (install / 'control_msgs').is_dir():
+    if not BUILT.is_file():
         pytest.skip(f'control_msgs does not load and {ROS_INTERFACES} has no '
                     'build_ros_interfaces.sh to build it (set TRAJPLAN_ROS_INTERFACES to the '
                     'folder of the interface sources)')

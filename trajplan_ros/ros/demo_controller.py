@@ -96,6 +96,7 @@ class DemoController(Node):
         self._q = np.array(value['positions'], dtype=float)
         self._action = action_type()
         self._active: _Following | None = None
+        self._following: dict[int, _Following] = {}     # accepted, by handle, until executed
         self._states = self.create_publisher(JointState, 'joint_states', 10)
         self._server = ActionServer(self, self._action, ACTION, self._execute,
                                     goal_callback=self._on_goal,
@@ -126,22 +127,22 @@ class DemoController(Node):
         """End the goal executing (preempted), then execute the new one: one at a time."""
         if self._active is not None:
             self._end(self._active, 'abort', 0, 'preempted by a new goal')
-        handle.execute()
-
-    async def _execute(self, handle: Any) -> Any:
-        """Follow one accepted goal; return its result when the control loop ends it."""
         traj = handle.request.trajectory
         joints = np.array([self._names.index(n) for n in traj.joint_names])
         times = [0.0] + [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec
                          for p in traj.points]
         positions = [self._q[joints]] + [np.array(p.positions) for p in traj.points]
-        following = _Following(handle, joints, np.array(times), np.array(positions),
-                               time.monotonic(), Future(), self._setting('fail'),
-                               self._setting('fail_after'), self._setting('goal_error'))
-        self._active = following
+        self._active = _Following(handle, joints, np.array(times), np.array(positions),
+                                  time.monotonic(), Future(), self._setting('fail'),
+                                  self._setting('fail_after'), self._setting('goal_error'))
+        self._following[id(handle)] = self._active
         self.get_logger().info(f'goal accepted: {len(traj.points)} points over '
                                f'{times[-1]:.3f} s')
-        return await following.done
+        handle.execute()
+
+    async def _execute(self, handle: Any) -> Any:
+        """Return the goal's result when the control loop (or a newer goal) ends it."""
+        return await self._following.pop(id(handle)).done
 
     def _tick(self) -> None:
         """Move the executing goal's joints to where its trajectory is now; publish the state."""

@@ -19,7 +19,8 @@ passes through these states:
   joint_trajectory_controller itself would), ``shut_down`` (cancelled at Ctrl-C), or
   ``timed_out`` (not finished ``controller_timeout`` s after the motion's duration: cancelled).
 
-Every end carries the largest difference between the newest joint_states and the planned goal.
+Every end carries the largest difference between joint_states and the planned goal, measured
+``SETTLE_S`` after the controller's result (its last state travels apart from the result).
 Concurrency: the worker thread hands motions over with ``submit`` (a deque and a guard
 condition) and the main thread calls ``shut_down``; everything else, the action client and its
 futures included, runs on the executor thread. control_msgs is imported only here, and only
@@ -54,6 +55,9 @@ RESULT_CODES = {0: 'executed', -1: 'invalid_goal', -2: 'invalid_joints',
                 -5: 'goal_tolerance_violated'}
 #: How often waiting motions and deadlines are looked at, s.
 TICK_S = 0.05
+#: How long after a result the joint error is measured: the controller's last joint_states
+#: (50 Hz or more) travels apart from the result, and may come after it, s.
+SETTLE_S = 0.05
 #: How to get control_msgs, for a refusal of ``execution: action``.
 HOW_TO = ('with ROS 2 from apt: sudo apt install ros-jazzy-control-msgs; with ROS 2 from PyPI: '
           'build it with build_ros_interfaces.sh and export the PYTHONPATH and LD_LIBRARY_PATH '
@@ -109,7 +113,8 @@ def position_error(goal: Mapping[str, float],
 def result_status(goal_status: int, error_code: int, preempted: bool,
                   stopping: bool) -> str:
     """Name the end of an accepted goal from its GoalStatus and its result's error_code."""
-    if preempted and goal_status in (GoalStatus.STATUS_CANCELED, GoalStatus.STATUS_ABORTED):
+    if preempted and (goal_status == GoalStatus.STATUS_CANCELED
+                      or goal_status == GoalStatus.STATUS_ABORTED and error_code == 0):
         return 'preempted'                    # cancelled, or aborted for the newer goal
     if goal_status == GoalStatus.STATUS_CANCELED:
         return 'shut_down' if stopping else 'cancelled'
@@ -136,9 +141,10 @@ class Motion:
     timeout: float                    # controller_timeout when it was planned, s
     start_tolerance: float            # start_tolerance when it was planned, rad
     deadline: float = math.inf        # monotonic time its current state gives up
-    state: str = 'waiting'            # waiting, sent, accepted
+    state: str = 'waiting'            # waiting, sent, accepted, settling (its result came)
     handle: Any = None                # the ClientGoalHandle once accepted
     preempted_by: str = ''            # the job whose motion replaces this one
+    result: tuple[str, int, str] = ('', 0, '')   # status, error_code, error_string
 
 
 class ActionExecution:
@@ -211,8 +217,8 @@ class ActionExecution:
             self._end(motion, 'refused', f'not sent: {problem}')
             return
         for older in self._sent:
-            older.preempted_by = motion.job.label
-            if older.handle is not None:
+            older.preempted_by = older.preempted_by or motion.job.label
+            if older.handle is not None and older.state == 'accepted':
                 older.handle.cancel_goal_async()
         motion.state, motion.deadline = 'sent', time.monotonic() + motion.timeout
         self._sent.append(motion)
@@ -230,17 +236,26 @@ class ActionExecution:
             return
         motion.handle, motion.state = handle, 'accepted'
         motion.deadline = time.monotonic() + motion.duration + motion.timeout
-        if motion.preempted_by or self._stopping:
-            handle.cancel_goal_async()
         self._report(motion.job, 'accepted', 'the controller accepted the goal', Execution())
+        if self._stopping:
+            self._cancel_at_shutdown(motion)
+        elif motion.preempted_by:
+            handle.cancel_goal_async()
         handle.get_result_async().add_done_callback(functools.partial(self._on_result, motion))
 
     def _on_result(self, motion: Motion, future: Any) -> None:
+        """Take the controller's result; the motion ends ``SETTLE_S`` later (``_tick``)."""
         if motion not in self._sent:
             return
         response = future.result()
         code, said = response.result.error_code, response.result.error_string
         status = result_status(response.status, code, bool(motion.preempted_by), self._stopping)
+        motion.state, motion.result = 'settling', (status, code, said)
+        motion.deadline = time.monotonic() + SETTLE_S
+
+    def _finish(self, motion: Motion) -> None:
+        """End a motion with its result and where joint_states say the arm stopped."""
+        status, code, said = motion.result
         error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
         what = {'executed': 'reached the goal', 'shut_down': 'cancelled at shutdown',
                 'preempted': f'cancelled for {motion.preempted_by}'}.get(
@@ -260,6 +275,9 @@ class ActionExecution:
                       f"{ACTION} to the controller's action, e.g. "
                       f'/arm_controller/{ACTION})')
         for motion in [m for m in self._sent if now > m.deadline]:
+            if motion.state == 'settling':
+                self._finish(motion)
+                continue
             if motion.state == 'sent':
                 reason = f'the controller did not answer the goal within {motion.timeout:g} s'
             else:
@@ -271,15 +289,33 @@ class ActionExecution:
                       Execution(None, '', error, joint))
 
     def _cancel_all(self) -> None:
-        """At shutdown: end the waiting motion, cancel the sent ones (their results end them)."""
+        """
+        At shutdown: end the waiting motion, cancel the executing ones.
+
+        Each ends when the controller has answered its cancel (then the request reached it),
+        one with its result in hand at once; a goal still unanswered is cancelled when accepted.
+        """
         self._stopping = True
         if self._waiting is not None:
             self._end(self._waiting, 'shut_down', 'not sent: shutting down')
             self._waiting = None
-        for motion in self._sent:
-            if motion.handle is not None:
-                motion.handle.cancel_goal_async()
+        for motion in list(self._sent):
+            if motion.state == 'accepted':
+                self._cancel_at_shutdown(motion)
+            elif motion.state == 'settling':
+                self._finish(motion)
         self._settle()
+
+    def _cancel_at_shutdown(self, motion: Motion) -> None:
+        future = motion.handle.cancel_goal_async()
+        future.add_done_callback(functools.partial(self._on_cancelled, motion))
+
+    def _on_cancelled(self, motion: Motion, future: Any) -> None:
+        """End a motion cancelled at shutdown once the controller has answered the cancel."""
+        if motion in self._sent:
+            error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
+            self._end(motion, 'shut_down', describe_end('cancelled at shutdown', error, joint,
+                                                        ''), Execution(None, '', error, joint))
 
     def _end(self, motion: Motion, status: str, message: str,
              execution: Execution | None = None) -> None:

@@ -246,10 +246,11 @@ class PlannerNode(Node):
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
-        self._use(Settings.from_parameters(self._parameter_values(), self._topic_description,
-                                           strict_start=False,
-                                           topic_semantic=self._topic_semantic))
-        self._use_execution(self._settings)
+        settings = Settings.from_parameters(self._parameter_values(), self._topic_description,
+                                            strict_start=False,
+                                            topic_semantic=self._topic_semantic)
+        self._use_execution(settings)            # before a plan can take the settings
+        self._use(settings)
         shown = ', '.join(f'{p.name}=<{len(p.value)} characters>' if p.name == 'robot_description'
                           else f'{p.name}={p.value}' for p in params)
         self.get_logger().info(f'parameters set for the next plan: {shown}')
@@ -502,7 +503,10 @@ class PlannerNode(Node):
         """Plan one job into its messages and log line."""
         s = self._settings
         if s.execution == 'action':         # the controller's state: it is what moves first
-            self._states.wait_for(s.arm.joint_names, s.controller_timeout)
+            deadline = time.monotonic() + s.controller_timeout
+            while not (self._states.wait_for(s.arm.joint_names, SHUTDOWN_STEP_S / 5)
+                       or self._stopping.is_set() or time.monotonic() > deadline):
+                pass
         start = self._states.start(s.arm.joint_names, s.start)
         self._log.debug(f'planning {job.label} {describe_goal(job.goal)} m')
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
@@ -526,12 +530,12 @@ class PlannerNode(Node):
             # after the trajectory: a caller told "succeeded" finds it published
             self._publish_outcome(job, outcome.status, outcome.reason, outcome.motion_time_s,
                                   outcome.clearance, outcome.via_points)
-            if not job.plan_only and execution == 'action':
+            if outcome.succeeded:
+                self._log.info(outcome.log)
+            else:
+                self._log.warning(outcome.log)
+            if not job.plan_only and execution == 'action':      # its statuses come after
                 self._execute(job, outcome)
-        if outcome.succeeded:
-            self._log.info(outcome.log)
-        else:
-            self._log.warning(outcome.log)
 
     def _send(self, job: Job, outcome: jobs.Outcome) -> None:
         """Publish a planned motion's trajectory (topic) and its tool path, if watched."""
@@ -626,7 +630,7 @@ class PlannerNode(Node):
         if current is not None:
             self._give_up(current)                       # still in one long iteration
         if self._execution is not None:                  # cancel what the controller executes
-            if not self._execution.shut_down(2 * SHUTDOWN_STEP_S):
+            if not self._execution.shut_down(4 * SHUTDOWN_STEP_S):
                 self.get_logger().warning('the controller did not confirm the cancel in time')
         answered = threading.Event()
         for _ in range(int(SHUTDOWN_STEP_S / 0.01)):     # the answers go out on the executor

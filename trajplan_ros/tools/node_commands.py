@@ -102,19 +102,33 @@ def _outcome(box: queue.Queue[Any], timeout: float, what: str,
     """
     from trajplan_ros.ros.outcomes import outcome_values, TOPIC
 
+    def values(msg: Any) -> dict[str, str]:
+        return {**outcome_values(msg), 'message': msg.message, 'name': msg.name}
+
     msg = _next(box, timeout, f'{stage} status of {what} on {TOPIC}',
-                lambda m: mine(v := outcome_values(m)) and v.get('stage', 'plan') == stage)
-    return {**outcome_values(msg), 'message': msg.message}
+                lambda m: mine(v := values(m)) and v.get('stage', 'plan') == stage)
+    return values(msg)
 
 
 def _line(values: dict[str, str]) -> str:
     return f"{values['status']}: {values['message']}"
 
 
-def _execution(box: queue.Queue[Any], timeout: float, what: str,
-               mine: Callable[[dict[str, str]], bool], plan: dict[str, str]) -> int:
-    """Print how the controller ended the planned motion of ``plan``: 0 executed, else 1."""
+def _execution(box: queue.Queue[Any], timeout: float, what: str, plan: dict[str, str]) -> int:
+    """
+    Print how the controller ended the planned motion of ``plan``: 0 executed, else 1.
+
+    Its statuses are the ones with the plan's name (the node's job): another request to the
+    same goal has another.
+    """
     from trajplan_ros.ros.outcomes import TERMINAL
+
+    if plan['status'] != 'succeeded':
+        print(f'trajplan: not executed: the plan ended {_line(plan)}', file=sys.stderr)
+        return 1
+
+    def mine(v: dict[str, str]) -> bool:
+        return v['name'] == plan['name']
 
     bound = timeout + float(plan['motion_time_s'] or 0)
     try:
@@ -177,7 +191,7 @@ def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeou
                          trajectory_topic)
     print_path(path, goal, frame)
     if wait_execution:
-        return _execution(results, timeout, 'the call', mine,
+        return _execution(results, timeout, 'the call',
                           _outcome(results, timeout, 'the call', mine))
     return 0
 
@@ -186,6 +200,9 @@ def _run_call(args: argparse.Namespace) -> int:
     _need_rclpy()
     from trajplan_ros.tools.ros_client import RosClient
 
+    if args.plan_only and args.wait_execution:
+        raise UsageError('--wait-execution: a plan from compute_plan (--plan-only) is never '
+                         'executed')
     with RosClient('trajplan_call') as ros:
         service = args.service or ('compute_plan' if args.plan_only else 'plan_trajectory')
         return call_planner(ros, _goal(args), service=service,
@@ -222,7 +239,7 @@ def _run_goal(args: argparse.Namespace) -> int:
             print_trajectory(_next(box, args.timeout, f'JointTrajectory on {args.trajectory}'),
                              args.trajectory)
         if args.wait_execution:
-            return _execution(results, args.timeout, 'the goal', _is_point(goal), plan)
+            return _execution(results, args.timeout, 'the goal', plan)
     return 0
 
 
