@@ -135,6 +135,7 @@ def test_a_newer_goal_preempts_leaving_one_goal_executing(
     ends = dict(execution_statuses(results, second))
     assert ends['executed'].startswith('reached the goal')
     # the controller's own account: never two goals executing, none once the second ended
+    controller.wait_for(r'goal ended: succeed', since)         # its log comes through a pipe
     events = [line for line in controller.lines[since:] if 'goal accepted' in line
               or 'goal ended' in line]
     events = events[next(i for i, line in enumerate(events) if 'accepted' in line):]  # ours
