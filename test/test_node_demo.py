@@ -10,9 +10,11 @@ through demo_controller, the second from where the first ended.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import re
 import subprocess
 import sys
+from typing import Mapping
 
 from node_under_test import Install, LIVENESS_S
 import numpy as np
@@ -24,14 +26,20 @@ from trajplan_ros.tools.node_process import COMPILE_BOUND_S
 pytestmark = pytest.mark.system
 
 
-def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, tmp_path) -> None:
-    env = colcon_install.env(os.environ)
+def run_demo(install: Install, base: Mapping[str, str],
+             cwd: Path) -> subprocess.CompletedProcess:
+    """Run ``trajplan demo`` with ``base`` as ``source install/setup.bash`` would leave it."""
+    env = install.env(base)
     # as after `source install/setup.bash`: planner_node is found on the PATH
-    env['PATH'] = os.pathsep.join([str(colcon_install.executable.parent), env.get('PATH', '')])
+    env['PATH'] = os.pathsep.join([str(install.executable.parent), env.get('PATH', '')])
     # a run of only this test compiles the kernels: the demo then waits as long as that takes
-    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path,
+    return subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=cwd,
                           env=env, capture_output=True, text=True,
                           timeout=COMPILE_BOUND_S + 3 * LIVENESS_S)
+
+
+def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, tmp_path) -> None:
+    done = run_demo(colcon_install, os.environ, tmp_path)
     out = done.stdout
     assert done.returncode == 0, out + done.stderr
     # the demo prefers planner_node beside this Python (a pip venv), else the one on the PATH
@@ -54,11 +62,7 @@ def test_demo_plans_the_paper_example_through_the_node(colcon_install: Install, 
 
 def test_demo_closes_the_loop_where_control_msgs_loads(
         colcon_install: Install, control_msgs_env: dict[str, str], tmp_path) -> None:
-    env = colcon_install.env(control_msgs_env)
-    env['PATH'] = os.pathsep.join([str(colcon_install.executable.parent), env.get('PATH', '')])
-    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'demo'], cwd=tmp_path,
-                          env=env, capture_output=True, text=True,
-                          timeout=COMPILE_BOUND_S + 3 * LIVENESS_S)
+    done = run_demo(colcon_install, control_msgs_env, tmp_path)
     out = done.stdout
     assert done.returncode == 0, out + done.stderr
     assert re.search(r'^started \S*/demo_controller \(pid \d+\)', out, re.M), out

@@ -254,12 +254,17 @@ class ActionExecution:
         motion.deadline = time.monotonic() + SETTLE_S
 
     def _finish(self, motion: Motion) -> None:
-        """End a motion with its result and where joint_states say the arm stopped."""
+        """End a motion with its result."""
         status, code, said = motion.result
-        error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
         what = {'executed': 'reached the goal', 'shut_down': 'cancelled at shutdown',
                 'preempted': f'cancelled for {motion.preempted_by}'}.get(
                     status, status.replace('_', ' '))
+        self._end_where(motion, status, what, code, said)
+
+    def _end_where(self, motion: Motion, status: str, what: str, code: int | None = None,
+                   said: str = '') -> None:
+        """End a sent motion, saying where joint_states put the arm against its goal."""
+        error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
         self._end(motion, status, describe_end(what, error, joint, said),
                   Execution(code, said, error, joint))
 
@@ -284,9 +289,7 @@ class ActionExecution:
                 motion.handle.cancel_goal_async()
                 reason = (f'the controller had not finished {motion.timeout:g} s after the '
                           f"motion's {motion.duration:.3f} s; cancelled")
-            error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
-            self._end(motion, 'timed_out', describe_end(reason, error, joint, ''),
-                      Execution(None, '', error, joint))
+            self._end_where(motion, 'timed_out', reason)
 
     def _cancel_all(self) -> None:
         """
@@ -313,9 +316,7 @@ class ActionExecution:
     def _on_cancelled(self, motion: Motion, future: Any) -> None:
         """End a motion cancelled at shutdown once the controller has answered the cancel."""
         if motion in self._sent:
-            error, joint = position_error(motion.goal, self._measured(list(motion.goal)))
-            self._end(motion, 'shut_down', describe_end('cancelled at shutdown', error, joint,
-                                                        ''), Execution(None, '', error, joint))
+            self._end_where(motion, 'shut_down', 'cancelled at shutdown')
 
     def _end(self, motion: Motion, status: str, message: str,
              execution: Execution | None = None) -> None:

@@ -448,10 +448,14 @@ class PlannerNode(Node):
             if job.reported:
                 return
             job.reported = True
-        self._results.publish(outcomes.outcome_status(
-            f'{self.get_fully_qualified_name()}: {job.label}',
-            'service call' if job.is_call else 'goal', job.stamp, job.goal, status, reason,
-            motion_time_s, clearance, via_points))
+        self._results.publish(self._status(job, status, reason, motion_time_s=motion_time_s,
+                                           clearance=clearance, via_points=via_points))
+
+    def _status(self, job: Job, status: str, message: str, **values: Any) -> DiagnosticStatus:
+        """Build a status of ``job`` for ``plan_results`` (``outcomes.outcome_status``)."""
+        return outcomes.outcome_status(f'{self.get_fully_qualified_name()}: {job.label}',
+                                       'service call' if job.is_call else 'goal', job.stamp,
+                                       job.goal, status, message, **values)
 
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
@@ -540,12 +544,11 @@ class PlannerNode(Node):
     def _send(self, job: Job, outcome: jobs.Outcome) -> None:
         """Publish a planned motion's trajectory (topic) and its tool path, if watched."""
         traj, s = outcome.trajectory, outcome.settings
-        if s.execution == 'topic':
+        if s.execution == 'topic':               # the action's controller tells its state
             self._trajectories.publish(trajectory_msg(traj))
+            self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
         if self._paths.get_subscription_count():     # a long path costs time to convert
             self._paths.publish(outcome.path or path_msg(s.arm, traj, self._header(s.base_frame)))
-        if s.execution == 'topic':               # the action's controller tells its state
-            self._states.trajectory_ended(traj.joint_names, traj.positions[-1].tolist())
 
     def _execute(self, job: Job, outcome: jobs.Outcome) -> None:
         """Hand a planned motion to the controller's action (``ros.execution``)."""
@@ -557,16 +560,11 @@ class PlannerNode(Node):
 
     def _report_execution(self, job: Job, status: str, message: str,
                           execution: outcomes.Execution | None = None) -> None:
-        """Publish and log one execution status of ``job`` (from the worker or executor)."""
-        self._results.publish(outcomes.outcome_status(
-            f'{self.get_fully_qualified_name()}: {job.label}',
-            'service call' if job.is_call else 'goal', job.stamp, job.goal, status, message,
-            execution=execution or outcomes.Execution()))
-        line = f'{job.label} {describe_goal(job.goal)} m: execution: {status}: {message}'
-        if status in ('accepted', 'executed', 'preempted', 'shut_down'):
-            self._log.info(line)
-        else:
-            self._log.warning(line)
+        """Publish and log one execution status of ``job``; an ERROR one is a warning."""
+        msg = self._status(job, status, message, execution=execution or outcomes.Execution())
+        self._results.publish(msg)
+        log = self._log.warning if msg.level == DiagnosticStatus.ERROR else self._log.info
+        log(f'{job.label} {describe_goal(job.goal)} m: execution: {status}: {message}')
 
     def _mark_counted(self, job: Job) -> bool:
         """Mark ``job`` as logged and counted; False if it already was."""
