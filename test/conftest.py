@@ -90,8 +90,12 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
 # --- control_msgs, for execution through FollowJointTrajectory --------------------------------
 
 #: The shared interface sources and their build script (control_msgs is not on PyPI).
-ROS_INTERFACES = Path(os.environ.get('TRAJPLAN_ROS_INTERFACES',
-                                     REPO.parent / 'shared' / 'ros_interfaces'))
+#: TRAJPLAN_ROS_INTERFACES, else the shared folder beside this clone, else the workspace's
+#: (/work/shared: a clone made elsewhere, such as CI's, still finds it).
+ROS_INTERFACES = next((Path(p) for p in (os.environ.get('TRAJPLAN_ROS_INTERFACES'),
+                                         REPO.parent / 'shared' / 'ros_interfaces',
+                                         '/work/shared/ros_interfaces')
+                       if p and Path(p).is_dir()), REPO.parent / 'shared' / 'ros_interfaces')
 #: Where they are built, once per venv: the script installs the rosidl generators into the venv
 #: and rewrites their CMake files, which it cannot do twice.
 INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
