@@ -89,15 +89,13 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
 
 # --- control_msgs, for execution through FollowJointTrajectory --------------------------------
 
-#: The shared interface sources and their build script (control_msgs is not on PyPI).
-#: TRAJPLAN_ROS_INTERFACES, else the shared folder beside this clone, else the workspace's
-#: (/work/shared: a clone made elsewhere, such as CI's, still finds it).
-ROS_INTERFACES = next((Path(p) for p in (os.environ.get('TRAJPLAN_ROS_INTERFACES'),
-                                         REPO.parent / 'shared' / 'ros_interfaces',
-                                         '/work/shared/ros_interfaces')
-                       if p and Path(p).is_dir()), REPO.parent / 'shared' / 'ros_interfaces')
-#: Where they are built, once per venv: the script installs the rosidl generators into the venv
-#: and rewrites their CMake files, which it cannot do twice.
+#: The interface sources and their build script (control_msgs is not on PyPI): the folder
+#: ROS_INTERFACES_SRC names, else ``shared/ros_interfaces`` beside this clone.
+ROS_INTERFACES = Path(os.environ.get('ROS_INTERFACES_SRC')
+                      or REPO.parent / 'shared' / 'ros_interfaces')
+#: The packages the tests need, and what they depend on (the folder holds more).
+INTERFACE_PACKAGES = ('control_msgs',)
+#: Where they are built, once per venv (the script installs the rosidl generators into it).
 INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
 #: Written when the build succeeded (a build stopped halfway leaves its folder behind).
 BUILT = INTERFACES_BUILD / 'built'
@@ -127,7 +125,8 @@ class _InterfacesBuild:
         cls.log = INTERFACES_BUILD / 'build.log'
         with open(cls.log, 'w', encoding='utf-8') as log:
             cls.proc = subprocess.Popen(['bash', str(script), sys.prefix, str(ROS_INTERFACES),
-                                         str(INTERFACES_BUILD)], stdout=log, stderr=log,
+                                         str(INTERFACES_BUILD), *INTERFACE_PACKAGES],
+                                        stdout=log, stderr=log,
                                         stdin=subprocess.DEVNULL, start_new_session=True)
 
     @classmethod
@@ -169,8 +168,8 @@ def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
     install = INTERFACES_BUILD / 'install'
     if not BUILT.is_file():
         pytest.skip(f'control_msgs does not load and {ROS_INTERFACES} has no '
-                    'build_ros_interfaces.sh to build it (set TRAJPLAN_ROS_INTERFACES to the '
-                    'folder of the interface sources)')
+                    'build_ros_interfaces.sh to build it (set ROS_INTERFACES_SRC to the folder '
+                    'of the interface sources)')
     python = f'python{sys.version_info.major}.{sys.version_info.minor}'
     paths = {'PYTHONPATH': [str(p) for p in install.glob(f'*/lib/{python}/site-packages')],
              'LD_LIBRARY_PATH': [str(p) for p in install.glob('*/lib')]}

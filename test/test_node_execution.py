@@ -28,6 +28,7 @@ from rclpy.parameter import Parameter
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.ros import outcomes
 from trajplan_ros.tools.node_commands import call_planner
+from trajplan_ros.tools.node_process import wait_until
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 pytestmark = pytest.mark.dds
@@ -69,6 +70,77 @@ def loop(start_node: Callable[..., NodeProcess],
     yield node, controller
     assert node.stop() == 0, node.output
     assert controller.stop() == 0, controller.output
+
+
+def action_clients(peer: RosClient, namespace: str) -> list[str]:
+    """Return the action clients the graph lists for the node ``trajplan`` in ``namespace``."""
+    from rclpy.action import get_action_client_names_and_types_by_node
+
+    found: list[str] = []
+
+    def listed() -> bool:
+        found[:] = [name for name, _ in get_action_client_names_and_types_by_node(
+            peer.node, 'trajplan', namespace)]
+        return bool(found)
+
+    wait_until(listed, LIVENESS_S, f'the action client of {namespace}/trajplan in the graph')
+    return found
+
+
+#: Where the controller is (its namespace, and how its joint_states reach the node's), and how
+#: the node is told: by a remapping rule, by controller_action, by a name in its namespace.
+ELSEWHERE = {
+    'remap': ('/by_remap', '/by_remap/arm_controller',
+              ('-r', 'follow_joint_trajectory:=/by_remap/arm_controller/follow_joint_trajectory')),
+    'parameter': ('/by_param', '/by_param/arm_controller',
+                  ('-p', 'controller_action:=/by_param/arm_controller/follow_joint_trajectory')),
+    'namespace': ('/arm1', '/arm1/arm_controller',
+                  ('-p', 'controller_action:=arm_controller/follow_joint_trajectory')),
+}
+
+
+@pytest.mark.parametrize('how', list(ELSEWHERE))
+def test_a_controller_under_its_own_name_is_reached(
+        start_node: Callable[..., NodeProcess], control_msgs_env: dict[str, str],
+        peer: RosClient, how: str, capsys: pytest.CaptureFixture[str]) -> None:
+    namespace, controller_namespace, told = ELSEWHERE[how]
+    # the controller's own name comes from its namespace alone, as joint_trajectory_controller's
+    controller = start_controller(start_node, control_msgs_env, controller_namespace, '-r',
+                                  f'joint_states:={namespace}/joint_states')
+    assert controller.has(rf'ready: {controller_namespace}/follow_joint_trajectory, ')
+    node = start_node('-r', f'__ns:={namespace}', '-p', 'execution:=action', '-p',
+                      'angular_velocity:=1.0', *told, env=control_msgs_env)
+    code = call_planner(peer, GOALS[1], service=f'{namespace}/plan_trajectory', tolerance=0.0,
+                        timeout=LIVENESS_S, trajectory_topic=None, wait_execution=True)
+    out, err = capsys.readouterr()
+    assert code == 0 and 'executed: reached the goal' in out, err
+    assert action_clients(peer, namespace) == [f'{controller_namespace}/follow_joint_trajectory']
+    assert node.stop() == 0, node.output
+    assert controller.stop() == 0, controller.output
+
+
+def test_a_missing_controller_is_named_as_the_client_names_it(
+        start_node: Callable[..., NodeProcess], control_msgs_env: dict[str, str],
+        peer: RosClient) -> None:
+    namespace = '/exec_missing'
+    node = start_node('-r', f'__ns:={namespace}', '-r',
+                      'follow_joint_trajectory:=/elsewhere/follow_joint_trajectory', '-p',
+                      'execution:=action', '-p', 'controller_timeout:=0.5', '-p',
+                      'start_tolerance:=0.0', env=control_msgs_env)
+    results = peer.inbox(DiagnosticStatus, f'{namespace}/plan_results', qos=outcomes.QOS)
+    assert peer.call(GetPlan, f'{namespace}/plan_trajectory', plan_request(GOALS[0])).plan.poses
+    (status, message), = execution_statuses(results, 'service call #1')
+    named = re.match(r'no FollowJointTrajectory server on (\S+) within 0.5 s', message)
+    assert status == 'no_controller' and named, message
+    assert action_clients(peer, namespace) == [named.group(1)] == [
+        '/elsewhere/follow_joint_trajectory']
+    refused, = peer.set_parameters(f'{namespace}/trajplan', [Parameter('controller_action',
+                                                                       value='arm controller')])
+    assert not refused.successful
+    assert refused.reason.startswith("'arm controller' is not a valid action name: failed to "
+                                     'resolve name: topic name must not contain characters '
+                                     'other than alphanumerics'), refused.reason
+    assert node.stop() == 0, node.output
 
 
 def fail(peer: RosClient, namespace: str, how: str) -> None:

@@ -4,8 +4,8 @@
 A FollowJointTrajectory server to try execution with (executable ``demo_controller``).
 
 It stands in for joint_trajectory_controller and joint_state_broadcaster: it serves
-``follow_joint_trajectory`` and publishes ``joint_states`` at ``rate`` Hz. An accepted goal's
-trajectory is followed in time, by linear interpolation between its points, from where the
+``follow_joint_trajectory`` (a relative name; remapping applies) and publishes
+``joint_states`` at ``rate`` Hz. An accepted goal's trajectory is followed in time, by linear interpolation between its points, from where the
 joints are when it is accepted (``header.stamp`` zero: start now). One goal executes at a time:
 a new goal preempts the one executing (aborted), a cancel request stops the arm where it is.
 A goal naming a joint it does not have is rejected, as joint_trajectory_controller does.
@@ -36,7 +36,7 @@ from rclpy.parameter import Parameter
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.ros.execution import ACTION, action_type
+from trajplan_ros.ros.execution import action_type, resolve_action
 
 
 __all__ = ['DemoController', 'FAILURES', 'main']
@@ -98,12 +98,13 @@ class DemoController(Node):
         self._active: _Following | None = None
         self._following: dict[int, _Following] = {}     # accepted, by handle, until executed
         self._states = self.create_publisher(JointState, 'joint_states', 10)
-        self._server = ActionServer(self, self._action, ACTION, self._execute,
+        self._name = resolve_action(self, 'follow_joint_trajectory')    # remapping applies
+        self._server = ActionServer(self, self._action, self._name, self._execute,
                                     goal_callback=self._on_goal,
                                     handle_accepted_callback=self._on_accepted,
                                     cancel_callback=lambda _: CancelResponse.ACCEPT)
         self.create_timer(1.0 / value['rate'], self._tick)
-        self.get_logger().info(f"ready: joints {', '.join(self._names)}")
+        self.get_logger().info(f"ready: {self._name}, joints {', '.join(self._names)}")
 
     def _check(self, params: list[Parameter]) -> SetParametersResult:
         """Refuse a ``fail`` it does not know (the others are read at each goal)."""

@@ -3,10 +3,12 @@
 """
 Execution through the controller's FollowJointTrajectory action (parameter ``execution: action``).
 
-Each planned motion is sent as a goal to ``follow_joint_trajectory`` (a relative name: remap it
-to the controller's, e.g. ``/arm_controller/follow_joint_trajectory``), and what the controller
-makes of it goes to ``plan_results`` as the execution statuses of ``ros.outcomes``. A motion
-passes through these states:
+Each planned motion is sent as a goal to the controller's action (parameter
+``controller_action``, ``follow_joint_trajectory`` by default, e.g.
+``/arm_controller/follow_joint_trajectory``), and what the controller makes of it goes to
+``plan_results`` as the execution statuses of ``ros.outcomes``. rcl_action expands an action's
+name in the node's namespace but applies no remapping rule, so the name is resolved here
+(``resolve_action``) and the client gets it absolute. A motion passes through these states:
 
 * waiting: planned, not yet sent, because no server is there yet (at most ``controller_timeout``
   s, then ``no_controller``), or a newer motion replaces it (``preempted``, never sent); when
@@ -44,11 +46,8 @@ from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.outcomes import Execution
 
 
-__all__ = ['ACTION', 'ActionExecution', 'action_type', 'Motion', 'position_error',
+__all__ = ['ActionExecution', 'action_type', 'Motion', 'position_error', 'resolve_action',
            'result_status', 'start_mismatch']
-
-#: The action's name, relative to the node's namespace.
-ACTION = 'follow_joint_trajectory'
 #: FollowJointTrajectory's Result.error_code values, by the status name they end in.
 RESULT_CODES = {0: 'executed', -1: 'invalid_goal', -2: 'invalid_joints',
                 -3: 'old_header_timestamp', -4: 'path_tolerance_violated',
@@ -76,6 +75,20 @@ def action_type() -> type:
                          f'({type(exc).__name__}: {str(exc).splitlines()[0]}): '
                          f'{HOW_TO}') from None
     return FollowJointTrajectory
+
+
+def resolve_action(node: Node, name: str) -> str:
+    """
+    Return action ``name`` made absolute by ``node``'s namespace and remapping rules.
+
+    The rules of ``--ros-args -r from:=to`` that name no type apply to topics and services
+    alike, so the service resolution is the action's. ValueError if the name is not valid.
+    """
+    try:
+        return node.resolve_service_name(name)
+    except Exception as exc:  # noqa: BLE001 - rclpy raises its own types for invalid names
+        why = str(exc).splitlines()[0].split(', at ')[0] if str(exc) else type(exc).__name__
+        raise ValueError(f'{name!r} is not a valid action name: {why}') from None
 
 
 def start_mismatch(names: Sequence[str], planned: Sequence[float],
@@ -134,6 +147,7 @@ class Motion:
     """One planned motion on its way to the controller."""
 
     job: Job
+    action: str                       # the controller's action, resolved (absolute)
     trajectory: JointTrajectory
     goal: dict[str, float]            # the planned final joint angles, by name
     start: list[float]                # the joint angles it was planned from, in goal's order
@@ -158,10 +172,10 @@ class ActionExecution:
         ``report(job, status, message, execution)`` publishes an execution status;
         ``measured(names)`` gives the newest joint_states angles.
         """
+        self._node = node
         self._action = action_type()
         self._report, self._measured = report, measured
-        self._client = ActionClient(node, self._action, ACTION)
-        self._name = node.resolve_service_name(ACTION)     # remapped, in the namespace
+        self._clients: dict[str, ActionClient] = {}         # by resolved action name
         self._handed: collections.deque[Motion] = collections.deque()   # worker -> executor
         self._waiting: Motion | None = None
         self._sent: list[Motion] = []
@@ -207,7 +221,7 @@ class ActionExecution:
         goes on.
         """
         motion = self._waiting
-        if motion is None or not self._client.server_is_ready():
+        if motion is None or not self._client(motion.action).server_is_ready():
             return
         self._waiting = None
         names = list(motion.goal)
@@ -222,8 +236,15 @@ class ActionExecution:
                 older.handle.cancel_goal_async()
         motion.state, motion.deadline = 'sent', time.monotonic() + motion.timeout
         self._sent.append(motion)
-        future = self._client.send_goal_async(self._action.Goal(trajectory=motion.trajectory))
+        future = self._client(motion.action).send_goal_async(
+            self._action.Goal(trajectory=motion.trajectory))
         future.add_done_callback(functools.partial(self._on_response, motion))
+
+    def _client(self, action: str) -> ActionClient:
+        """Return the client of the resolved ``action``, made the first time it is named."""
+        if action not in self._clients:
+            self._clients[action] = ActionClient(self._node, self._action, action)
+        return self._clients[action]
 
     def _on_response(self, motion: Motion, future: Any) -> None:
         handle = future.result()
@@ -276,9 +297,8 @@ class ActionExecution:
         if motion is not None and now > motion.deadline:
             self._waiting = None
             self._end(motion, 'no_controller', f'no FollowJointTrajectory server on '
-                      f'{self._name} within {motion.timeout:g} s (remap '
-                      f"{ACTION} to the controller's action, e.g. "
-                      f'/arm_controller/{ACTION})')
+                      f'{motion.action} within {motion.timeout:g} s (set controller_action '
+                      "to the controller's action, e.g. /arm_controller/follow_joint_trajectory)")
         for motion in [m for m in self._sent if now > m.deadline]:
             if motion.state == 'settling':
                 self._finish(motion)

@@ -24,8 +24,9 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
 * ``plan_results`` (diagnostic_msgs/msg/DiagnosticStatus, out): how each goal and call ended
   and why, with what the caller sent (``ros.outcomes``).
 * ``follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory, client; with
-  ``execution: action``): each motion is sent as a goal there instead, and how the controller
-  ends it goes to ``plan_results`` (``ros.execution``); ``execution: none`` sends nothing.
+  ``execution: action``; the parameter ``controller_action`` names another): each motion is
+  sent as a goal there instead, and how the controller ends it goes to ``plan_results``
+  (``ros.execution``); ``execution: none`` sends nothing.
 * ``joint_states`` (sensor_msgs/msg/JointState, in): the start state, matched by joint name.
 * ``clicked_point`` (geometry_msgs/msg/PointStamped, in; RViz's Publish Point tool): a goal.
 * ``robot_description`` (std_msgs/msg/String, in; reliable, transient local, depth 1, as
@@ -99,7 +100,7 @@ from trajplan_ros.planning import prepare
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
-from trajplan_ros.ros.execution import action_type, ActionExecution, Motion
+from trajplan_ros.ros.execution import action_type, ActionExecution, Motion, resolve_action
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
@@ -181,6 +182,7 @@ class PlannerNode(Node):
         self._topic_semantic = ''                     # the last robot_description_semantic
         self._live = LiveScene()                      # obstacles from collision_objects
         self._settings = Settings.from_parameters(self._parameter_values())
+        resolve_action(self, self._settings.controller_action)
         self._warn_ignored_joints(self._settings)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -239,6 +241,7 @@ class PlannerNode(Node):
         try:
             Settings.from_parameters(values, self._topic_description, strict_start=strict,
                                      topic_semantic=self._topic_semantic)
+            resolve_action(self, values['controller_action'])
             if values['execution'] == 'action' and self._execution is None:
                 action_type()
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
@@ -553,7 +556,8 @@ class PlannerNode(Node):
     def _execute(self, job: Job, outcome: jobs.Outcome) -> None:
         """Hand a planned motion to the controller's action (``ros.execution``)."""
         traj, s = outcome.trajectory, outcome.settings
-        self._execution.submit(Motion(job, trajectory_msg(traj),
+        self._execution.submit(Motion(job, resolve_action(self, s.controller_action),
+                                      trajectory_msg(traj),
                                       dict(zip(traj.joint_names, traj.positions[-1].tolist())),
                                       outcome.start.tolist(), traj.duration,
                                       s.controller_timeout, s.start_tolerance))

@@ -81,6 +81,10 @@ def _arm_specs() -> list[ParameterSpec]:
     ]
 
 
+#: The controller's action unless ``controller_action`` says otherwise (relative, as
+#: joint_trajectory_controller serves it in its own namespace).
+CONTROLLER_ACTION = 'follow_joint_trajectory'
+
 #: Every parameter of the node, in declaration order.
 PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('robot_description', '',
@@ -180,9 +184,13 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('execution', 'topic',
                   'how a planned motion reaches the controller: topic (published on '
                   'joint_trajectory), action (a FollowJointTrajectory goal to '
-                  'follow_joint_trajectory, with its result on plan_results; needs '
+                  'controller_action, with its result on plan_results; needs '
                   'control_msgs) or none (planned and answered, never sent)',
                   choices=('topic', 'action', 'none')),
+    ParameterSpec('controller_action', CONTROLLER_ACTION,
+                  "execution action: the controller's FollowJointTrajectory action; a relative "
+                  "name is in the node's namespace and remapping applies, an absolute one such "
+                  'as /arm_controller/follow_joint_trajectory is used as it is'),
     ParameterSpec('start_tolerance', 0.05,
                   "execution action: largest difference between a plan's start and the newest "
                   'joint_states, per joint, for the motion to be sent, rad; 0: not checked',
@@ -226,6 +234,8 @@ class Settings:
     goal_orientation: str = 'ignore'
     #: How a planned motion reaches the controller: 'topic', 'action' or 'none'.
     execution: str = 'topic'
+    #: execution action: the controller's action, as given (the node resolves it).
+    controller_action: str = CONTROLLER_ACTION
     #: execution action: the largest start difference to joint_states, rad (0: unchecked).
     start_tolerance: float = 0.05
     #: execution action: how long the controller may take, s.
@@ -276,8 +286,9 @@ class Settings:
             if spec.choices and values[spec.name] not in spec.choices:
                 raise ValueError(f"{spec.name} must be one of {', '.join(spec.choices)}, "
                                  f'got {values[spec.name]!r}')
-        if not values['base_frame']:
-            raise ValueError('base_frame must not be empty')
+        for name in ('base_frame', 'controller_action'):
+            if not values[name]:
+                raise ValueError(f'{name} must not be empty')
         start_positions, base_frame = values['start_positions'], values['base_frame']
         defaults = default_values()
         zeros = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
@@ -301,7 +312,9 @@ class Settings:
                    max_trajectory_points=values['max_trajectory_points'],
                    max_queued_calls=values['max_queued_calls'],
                    goal_orientation=values['goal_orientation'],
-                   execution=values['execution'], start_tolerance=values['start_tolerance'],
+                   execution=values['execution'],
+                   controller_action=values['controller_action'],
+                   start_tolerance=values['start_tolerance'],
                    controller_timeout=values['controller_timeout'],
                    diagnostic_period=values['diagnostic_updater.period'])
 
