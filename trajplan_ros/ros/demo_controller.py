@@ -5,8 +5,9 @@ A FollowJointTrajectory server to try execution with (executable ``demo_controll
 
 It stands in for joint_trajectory_controller and joint_state_broadcaster: it serves
 ``follow_joint_trajectory`` (a relative name; remapping applies) and publishes
-``joint_states`` at ``rate`` Hz. An accepted goal's trajectory is followed in time, by linear interpolation between its points, from where the
-joints are when it is accepted (``header.stamp`` zero: start now). One goal executes at a time:
+``joint_states`` at ``rate`` Hz. An accepted goal's trajectory is followed in time, by linear
+interpolation between its points, from where the joints are when it is accepted
+(``header.stamp`` zero: start now). One goal executes at a time:
 a new goal preempts the one executing (aborted), a cancel request stops the arm where it is.
 A goal naming a joint it does not have is rejected, as joint_trajectory_controller does.
 Its parameters ``fail``, ``fail_after`` and ``goal_error`` may change while it runs (each goal
