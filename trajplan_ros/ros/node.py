@@ -45,7 +45,9 @@ Concurrency, all of it:
   the executor for that, later Jazzy releases do; this path works with both.
 * The main thread waits for SIGINT or SIGTERM (rclpy's own signal handling is off), then
   ``shut_down`` stops intake, stops the running plan, answers every waiting call with an empty
-  plan, and only then the context is shut down.
+  plan; the worker, then the executor thread, are joined, and only then the context is shut
+  down. A thread still running ``EXIT_WAIT_S`` later (a first start's compile) is left to end
+  with the process: the interpreter's exit would unwind it inside C++ and abort.
 * With ``execution: action``, the worker hands each planned motion to ``ActionExecution``
   (a deque and a guard condition); its action client, futures and timer run on the executor
   thread, and ``shut_down`` cancels the executing goal through it before the context ends.
@@ -68,6 +70,7 @@ import collections
 import gc
 import itertools
 import math
+import os
 import signal
 import sys
 import threading
@@ -125,6 +128,8 @@ ANSWER_GRACE_S = 5e-3
 SWITCH_INTERVAL_S = 5e-4
 #: At shutdown: how long to wait for the running plan to stop and for the answers to go out.
 SHUTDOWN_STEP_S = 0.5
+#: At exit: how long to wait for each thread to end (a plan stops at its next check).
+EXIT_WAIT_S = 5.0
 
 
 def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
@@ -621,6 +626,10 @@ class PlannerNode(Node):
 
     # --- shutdown (main thread) -------------------------------------------------------------
 
+    def join_worker(self, timeout: float) -> None:
+        """Wait up to ``timeout`` s for the worker thread to end (after ``shut_down``)."""
+        self._worker.join(timeout)
+
     def shut_down(self) -> None:
         """Stop intake and the running plan, answer every waiting call with an empty plan."""
         with self._publish_lock:
@@ -683,11 +692,23 @@ def main(args: list[str] | None = None) -> int:
     while spinner.is_alive() and not stop.wait(0.5):
         pass
     node.shut_down()
-    executor.shutdown(timeout_sec=SHUTDOWN_STEP_S)
-    spinner.join(timeout=SHUTDOWN_STEP_S)
+    node.join_worker(EXIT_WAIT_S)                  # its plan stops at its next check
+    executor.shutdown(timeout_sec=EXIT_WAIT_S)
+    spinner.join(timeout=EXIT_WAIT_S)
     node.destroy_node()
     rclpy.try_shutdown()
-    return 1 if failure else 0
+    code = 1 if failure else 0
+    alive = [t.name for t in threading.enumerate()
+             if t is not threading.main_thread() and t.is_alive()]
+    if alive:
+        # the interpreter's exit would stop a thread inside C or C++ code (rclpy's wait, LLVM
+        # compiling a kernel) by unwinding it there: std::terminate, exit -6. Leave them be.
+        get_logger('trajplan').warning(f"{', '.join(alive)} still running {EXIT_WAIT_S:g} s "
+                                       'after shutdown: they end with the process')
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 if __name__ == '__main__':
