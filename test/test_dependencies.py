@@ -191,6 +191,10 @@ def all_imports(tree: ast.Module) -> Iterator[str]:
             yield from (alias.name.partition('.')[0] for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             yield node.module.partition('.')[0]
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+              and node.func.id == 'lazy' and node.args
+              and isinstance(node.args[0], ast.Constant)):       # kinematics.lazy_modules
+            yield node.args[0].value.partition('.')[0]
 
 
 def third_party_imports(load_time_only: bool = True) -> dict[str, set[str]]:

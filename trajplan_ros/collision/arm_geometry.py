@@ -30,8 +30,10 @@ from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel
 from trajplan_ros.kinematics.jit import inlined_kernel, kernel
+from trajplan_ros.kinematics.lazy_modules import lazy
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf, to_axis
-import yourdfpy
+
+yourdfpy = lazy('yourdfpy')
 
 __all__ = ['ArmGeometry', 'LinkFrames', 'LinkGeometry', 'poses_at']
 

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import os
 from typing import Any
 
-import coal
 import numpy as np
 from trajplan_ros.collision.arm_geometry import ArmGeometry
 from trajplan_ros.collision.convex import ConvexSet, pair_convex_bounds, POINTS
@@ -34,8 +33,11 @@ from trajplan_ros.collision.shapes import MeshSource, Shape
 from trajplan_ros.collision.skip_pairs import computed_skip_pairs, read_srdf, SAMPLES, SkipPairs
 from trajplan_ros.collision.spheres import pair_lower_bounds, SphereModel
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel
+from trajplan_ros.kinematics.lazy_modules import lazy
 from trajplan_ros.kinematics.urdf_import import read_urdf
-import trimesh
+
+coal = lazy('coal')
+trimesh = lazy('trimesh')
 
 __all__ = ['ArmCollision', 'Body', 'CollisionWorld', 'convex_hull', 'DEFAULT_PADDING',
            'HULL_SLACK', 'PairTable']

@@ -28,10 +28,12 @@ import os
 from pathlib import Path
 from typing import Callable
 
-import coal
 import numpy as np
 from trajplan_ros.collision.errors import InvalidCollisionInput
-import trimesh
+from trajplan_ros.kinematics.lazy_modules import lazy
+
+coal = lazy('coal')
+trimesh = lazy('trimesh')
 
 __all__ = ['MAX_MESH_BYTES', 'MAX_MESH_VERTICES', 'MeshSource', 'Shape', 'SHAPE_DIMENSIONS']
 

@@ -21,9 +21,8 @@ line number, so an edit of comments or docstrings alone keeps every kernel.
 This reaches into numba's caching classes (``numba.core.caching``); ``setup.py`` pins the range
 of numba releases tested, and ``test_kernels`` checks the names used here.
 
-``warm_up`` compiles or loads every kernel once, so that no plan pays for it; it reports how
-long that took and whether anything had to be compiled. ``uncached`` tells beforehand how many
-kernels have nothing on disk yet, so that a first start can say that it is compiling.
+``warm_up`` compiles or loads the kernels a run calls, so that no plan pays for it; it says when
+it begins to compile, and reports how long it took and whether anything had to be compiled.
 """
 from __future__ import annotations
 
@@ -39,17 +38,17 @@ import time
 from typing import Any, Callable
 
 import numba
-from numba.core import caching, types
+from numba.core import caching, event, types
 
-__all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'uncached',
-           'warm_up']
+__all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'warm_up']
 
 _LOG = logging.getLogger('trajplan_ros')
 #: The folders whose sources key every kernel's cache: the kernels and all they read.
 CORE = tuple(Path(__file__).resolve().parents[1] / name
              for name in ('kinematics', 'motion', 'collision', 'search', 'planning'))
-#: How long compiling every kernel takes (doc/benchmarks.md: the first start).
-FIRST_COMPILE = 'about two minutes on two idle cores, longer on a busy machine'
+#: How long compiling takes (doc/benchmarks.md: the first start).
+FIRST_COMPILE = ('about 40 s for the paper arm without a scene, two minutes for every kernel, '
+                 'on two idle cores; longer on a busy machine')
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
@@ -220,18 +219,6 @@ def kernels() -> tuple[Any, ...]:
     return tuple(_KERNELS)
 
 
-def uncached() -> int:
-    """
-    Return how many kernels have no machine code on disk yet (none kept: every kernel).
-
-    Inlined kernels are left out: they are compiled into their callers, never on their own.
-    """
-    def on_disk(compiled: Any) -> bool:
-        index = getattr(getattr(compiled._cache, '_cache_file', None), '_index_path', None)
-        return index is not None and Path(index).is_file()
-    return sum(not on_disk(k) for k in _KERNELS if k.targetoptions.get('inline') != 'always')
-
-
 @dataclass(frozen=True)
 class Warmup:
     """What ``warm_up`` did: its time (s) and how many kernels it compiled or loaded."""
@@ -251,22 +238,35 @@ class Warmup:
 def warm_up(run: Callable[[], object],
             announce: Callable[[str], object] | None = None) -> Warmup:
     """
-    Call ``run`` (which calls every kernel once) and count what it compiled or loaded.
+    Call ``run`` (which calls kernels) and count what it compiled or loaded.
 
-    A kernel's new machine code is either loaded (numba's cache hits) or compiled. Where some
-    kernel has nothing on disk yet, ``announce`` is told so first, with how long a compile takes.
+    A kernel's new machine code is either loaded (numba's cache hits) or compiled. When the
+    first compile begins, ``announce`` is told so, with how long compiling takes.
     """
     def loaded() -> int:
         return sum(sum(k.stats.cache_hits.values()) for k in _KERNELS)
 
-    missing = uncached()
-    if missing and announce is not None:
-        announce(f'compiling {missing} planning kernels for the first time: {FIRST_COMPILE} '
-                 '(later starts load them in about a second)')
     overloads, hits = {k: len(k.overloads) for k in _KERNELS}, loaded()
     began = time.perf_counter()
-    run()
+    with event.install_listener('numba:compile', _FirstCompile(announce)):
+        run()
     seconds = time.perf_counter() - began
     new = sum(len(k.overloads) - overloads[k] for k in _KERNELS)
     from_cache = loaded() - hits
     return Warmup(seconds, new - from_cache, from_cache)
+
+
+class _FirstCompile(event.Listener):
+    """Says once, when numba begins to compile (a kernel found on disk is loaded silently)."""
+
+    def __init__(self, announce: Callable[[str], object] | None) -> None:
+        self._announce = announce
+
+    def on_start(self, _: event.Event) -> None:
+        if self._announce is not None:
+            self._announce(f'compiling planning kernels for the first time: {FIRST_COMPILE} '
+                           '(later starts load them in about a second)')
+            self._announce = None
+
+    def on_end(self, _: event.Event) -> None:
+        pass

@@ -34,7 +34,9 @@ import defusedxml.ElementTree
 import numpy as np
 
 from trajplan_ros.kinematics.errors import InvalidArmModel
-import yourdfpy
+from trajplan_ros.kinematics.lazy_modules import lazy
+
+yourdfpy = lazy('yourdfpy')
 
 __all__ = ['MAX_BYTES', 'MAX_LINKS', 'UrdfChain', 'joints_between', 'read_chain', 'read_urdf',
            'to_axis']

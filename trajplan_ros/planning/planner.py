@@ -399,18 +399,24 @@ def _six_joint_arm() -> ArmModel:
                             upper=[np.pi] * 6)
 
 
-def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
+def prepare(*requests: PlanRequest,
+            announce: Callable[[str], object] | None = None) -> Warmup:
     """
-    Compile or load the kernels ``plan`` uses, so that no plan pays for it; say what it did.
+    Compile or load the kernels that plans like ``requests`` use, so that none pays for it.
 
-    Where that means compiling, ``announce`` is told so first, with about how long it takes.
+    Where that means compiling, ``announce`` is told so first, with about how long it takes;
+    the result says what was done. Each request is planned once, to a goal its arm reaches (the
+    tool at the middle of its joint limits; in pose mode with that orientation), with its mode
+    and motion law, unbounded in time (a plan cut short would not reach the polish); with a
+    world, the paper's arm once among a box instead of that world (whose goals may be blocked
+    or need long detours). A kernel's machine code serves every arm.
 
-    The node calls it before it offers its service, ``trajplan`` before its first plan. It plans
-    the paper's arm once in each mode of a point goal, then once among a box (the collision
-    check), and a made-up six-joint arm once in free mode and once to a pose (a kernel's
-    machine code serves every arm; the six joints reach the polish's SQP step).
+    Without requests, every kernel: the paper's arm in each mode of a point goal, among a box,
+    and a made-up six-joint arm in free mode and to a pose (the polish's SQP step), as the
+    benchmarks and the command's first plan want. The node prepares its settings' requests
+    only: the paper's arm without a scene needs no collision kernel and loads a third of them.
     """
-    def plans() -> None:
+    def every_plan() -> None:
         for mode in (Mode.FREE, Mode.RADIAL, Mode.APPROACH):
             plan(_WARM_UP_GOAL, mode=mode, seed=0)
         plan(_WARM_UP_GOAL, seed=0, world=_warm_up_world())
@@ -420,7 +426,20 @@ def prepare(announce: Callable[[str], object] | None = None) -> Warmup:
         plan(frame[:3, 3], arm=arm, mode=Mode.POSE, seed=0,
              orientation=quaternions(frame[None, :3, :3])[0])
 
-    return warm_up(plans, announce)
+    def these_plans() -> None:
+        for request in requests:
+            arm = request.planned_arm
+            middle = (arm.lower + arm.upper) / 2
+            frame = arm.frames(np.where(np.isfinite(middle), middle, 0.0))[0, -1]
+            pose = quaternions(frame[None, :3, :3])[0] if request.mode is Mode.POSE else None
+            plan(request.replace(goal=frame[:3, 3], start=None, seed=0, max_planning_time=None,
+                                 orientation=pose if pose is not None else request.orientation,
+                                 world=None))
+            if request.world is not None:
+                plan(PlanRequest(_WARM_UP_GOAL, seed=0, motion=request.motion,
+                                 world=_warm_up_world()))
+
+    return warm_up(these_plans if requests else every_plan, announce)
 
 
 def _warm_up_world() -> CollisionWorld:

@@ -99,7 +99,7 @@ from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.scene import Scene
-from trajplan_ros.planning import prepare
+from trajplan_ros.planning import Mode, prepare
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
@@ -202,6 +202,7 @@ class PlannerNode(Node):
         self._publish_lock = threading.Lock()
         self._finished: collections.deque[tuple[Job, Path | None]] = collections.deque()
         self._current: Job | None = None                        # the job being planned
+        self._prepared: set[tuple] = set()          # the kinds of plan whose kernels are ready
         self._flushed = threading.Event()
 
         self._deliver = self.create_guard_condition(self._deliver_answers)
@@ -488,18 +489,34 @@ class PlannerNode(Node):
 
     def _prepare(self) -> None:
         """
-        Compile or load the kernels before the first plan, saying so; then log ``ready``.
+        Compile or load the kernels the settings' plans use, saying so; then log ``ready``.
 
         Goals and calls that come meanwhile wait in the mailbox: the service is offered at once,
-        even while a first start compiles for a minute.
+        even while a first start compiles.
         """
-        kernels = prepare(self.get_logger().info)
-        log = self.get_logger().info if kernels.compiled else self.get_logger().debug
-        log(kernels.describe())
+        self._prepare_for(self._settings)
         s = self._settings
         r = s.request
         self.get_logger().info(f'ready: {jobs.describe_arm(s)}, {r.algorithm}, '
                                f'{r.angular_velocity} rad/s, {r.motion.describe()} profile')
+
+    def _prepare_for(self, settings: Settings) -> None:
+        """
+        Make the kernels of plans with ``settings`` ready before one runs on the plan's clock.
+
+        Once for each kind of plan (mode, pose goals, scene, profile): other settings' kernels
+        (another mode, a scene) are compiled or loaded when settings first need them.
+        """
+        r = settings.request
+        pose = settings.goal_orientation == 'pose'
+        kind = (r.mode, pose, r.world is not None, r.motion.profile)
+        if kind in self._prepared:
+            return
+        requests = [r, r.replace(mode=Mode.POSE)] if pose else [r]
+        kernels = prepare(*requests, announce=self.get_logger().info)
+        log = self.get_logger().info if kernels.compiled else self.get_logger().debug
+        log(kernels.describe())
+        self._prepared.add(kind)
 
     def _handle(self, job: Job) -> None:
         outcome = self._plan(job)
@@ -514,6 +531,7 @@ class PlannerNode(Node):
     def _plan(self, job: Job) -> jobs.Outcome:
         """Plan one job into its messages and log line."""
         s = self._settings
+        self._prepare_for(s)
         if s.execution == 'action':         # the controller's state: it is what moves first
             deadline = time.monotonic() + s.controller_timeout
             while not (self._states.wait_for(s.arm.joint_names, SHUTDOWN_STEP_S / 5)

@@ -287,7 +287,8 @@ def _run_plan(args: argparse.Namespace) -> int:
     if ignored:
         print(f"trajplan: warning: the joint limits' joints {', '.join(ignored)} are not "
               'planned: ignored', file=sys.stderr)
-    kernels = prepare(lambda text: print(f'trajplan: {text}', file=sys.stderr, flush=True))
+    kernels = prepare(request, announce=lambda text: print(f'trajplan: {text}', file=sys.stderr,
+                                                           flush=True))
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
     if args.goals is None:
