@@ -10,7 +10,7 @@ from trajplan_ros.kinematics.lazy_modules import lazy
 #: The collision and URDF libraries, and what they bring.
 HEAVY = ('coal', 'trimesh', 'yourdfpy', 'lxml', 'networkx')
 #: Prints which of ``HEAVY`` a process has imported after running the code before it.
-REPORT = f"import sys; print(sorted(m for m in {HEAVY!r} if m in sys.modules))"
+REPORT = f'import sys; print(sorted(m for m in {HEAVY!r} if m in sys.modules))'
 
 
 def imported_after(code: str) -> str:
