@@ -21,7 +21,7 @@ from trajplan_ros import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile, Timing
 from trajplan_ros.motion.time_law import JERK_LIMITED, motion_times, TimeLaw
 from trajplan_ros.motion.trajectory import _profiles, motion_points, motion_trajectory
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 
 __all__ = ['arm_of', 'check_under_the_controller', 'MS', 'profiles', 'ruckig_duration']
 

@@ -11,8 +11,8 @@ import pytest
 
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
 from trajplan_ros.search.objective import Objective
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.bench.chain_bench import minimax_reference
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
 from trajplan_ros.tools.cli import main
 
 DOWN = np.array([0.0, 0.0, -1.0])

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 
 
 def random_arm(rng: np.random.Generator, n: int) -> ArmModel:

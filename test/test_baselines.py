@@ -9,7 +9,7 @@ import pytest
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.planner import ALGORITHMS
 from trajplan_ros.search.objective import Objective
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET as TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET
 
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])

@@ -22,11 +22,10 @@ from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import plan
 from trajplan_ros.search.objective import Mode, Objective
-from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case
+from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case, PAPER_TABLE5
 from trajplan_ros.tools.bench.methods import METHODS, pyswarms_logging
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TABLE5
 from trajplan_ros.tools.bench.reference import exact_minimum
-from trajplan_ros.tools.bench.report import format_failures, summarise
+from trajplan_ros.tools.bench.report import format_failures, format_sameness, summarise
 from trajplan_ros.tools.bench.runner import Results, run
 from trajplan_ros.tools.cli import main
 
@@ -236,7 +235,6 @@ import logging, os, sys
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.search.objective import Mode
-from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import load, METHODS
 root = logging.getLogger()
 before = (list(root.handlers), root.level)
@@ -353,3 +351,18 @@ def test_a_baseline_version_plans_the_same_goals_in_its_own_process(capsys, tmp_
     assert rows['baseline'][1:3] == rows['iepso'][1:3] == ['100.00', '%']
     assert main(argv[:-1] + [str(tmp_path)]) == 2
     assert 'no trajplan_ros package in that folder' in capsys.readouterr().err
+
+
+def test_a_slowdown_past_five_percent_of_the_baseline_is_named() -> None:
+    def results(seconds: float) -> Results:
+        out = Results.empty(3, 2)
+        out.x[:], out.motion_time[:], out.seconds[:] = 0.0, 1.0, seconds
+        return out
+
+    within = format_sameness({'iepso': results(0.0104), 'baseline': results(0.0100)})
+    assert within.splitlines()[0].startswith('baseline: the same joint goals bit for bit on 3 ')
+    assert within.splitlines()[1] == ('baseline: median plan time 10.40 ms against the '
+                                      "baseline's 10.00 ms (+4.0 %): not slower than the "
+                                      'baseline by more than 5%')
+    slower = format_sameness({'iepso': results(0.0106), 'baseline': results(0.0100)})
+    assert slower.endswith('(+6.0 %): SLOWER than the baseline by more than 5%')

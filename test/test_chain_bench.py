@@ -9,9 +9,9 @@ import pytest
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, Objective
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, IndependentFk,
                                                   minimax_reference)
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
 from trajplan_ros.tools.bench.reference import exact_minimum
 from trajplan_ros.tools.cli import main
 

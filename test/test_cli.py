@@ -8,7 +8,7 @@ import sys
 
 import pytest
 from trajplan_ros.planning import planner
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.cli import build_parser, main
 
 

@@ -24,7 +24,7 @@ from trajplan_ros.collision.skip_pairs import read_srdf
 from trajplan_ros.collision.spheres import SphereModel
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
+from trajplan_ros.tools.bench.cases import PUBLISHED, robots_dir
 import trimesh
 import yourdfpy
 

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from trajplan_ros import ArmModel, paper_arm, plan
 from trajplan_ros.ros.messages import trajectory_msg
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 
 S = 1_000_000_000           # ns per second
 MS = 1_000_000              # ns per millisecond

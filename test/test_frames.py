@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics.frames import RobotFrames, UnknownFrame
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 import yourdfpy
 
 #: The SO-101 under a world link, 0.1 m off and turned 90 degrees about z, as a cell places it.

@@ -35,7 +35,7 @@ import numpy as np
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 import pytest
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 pytestmark = pytest.mark.system

@@ -24,8 +24,8 @@ from trajplan_ros import ArmModel, plan
 from trajplan_ros.kinematics import forward
 from trajplan_ros.kinematics.jit import CORE, core_stamp, FIRST_COMPILE, kernels
 from trajplan_ros.planning import prepare, RewardPunishment
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PUBLISHED
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'trajplan_ros'
 #: The modules whose sources key the kernels' cache (``jit.CORE``).

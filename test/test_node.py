@@ -29,7 +29,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import plan
 from trajplan_ros.ros import outcomes
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 pytestmark = pytest.mark.dds

@@ -20,7 +20,7 @@ from node_under_test import Install, LIVENESS_S
 import numpy as np
 import pytest
 from trajplan_ros import plan
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.node_process import COMPILE_BOUND_S
 
 pytestmark = pytest.mark.system

@@ -22,7 +22,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
 from trajplan_ros import paper_arm
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient
 
 pytestmark = pytest.mark.dds

@@ -26,7 +26,7 @@ from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros import ArmModel
 from trajplan_ros.kinematics.rotations import quaternions
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 import yourdfpy
 

@@ -15,8 +15,7 @@ from trajplan_ros.planning import planner
 from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
 from trajplan_ros.search.iepso import iepso
 from trajplan_ros.search.objective import Mode, Objective
-from trajplan_ros.tools.bench.cases import draw_cases
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import draw_cases, PAPER_TARGET
 from trajplan_ros.tools.bench.reference import _solutions, radial_angle
 
 TARGET = PAPER_TARGET.tolist()
@@ -358,7 +357,7 @@ def test_a_stopped_panda_plan_ends_at_once_even_inside_the_multistart() -> None:
     # the multi-start polishes 77 candidates for about 25 ms (numpy core) without an iteration
     # of its own: the stop is asked after every polish step, so the plan ends within one
     from trajplan_ros import ArmModel
-    from trajplan_ros.tools.bench.published_arms import PUBLISHED
+    from trajplan_ros.tools.bench.cases import PUBLISHED
 
     panda = PUBLISHED['panda']
     arm = ArmModel.from_urdf(panda.urdf, panda.base_link, panda.tip_link)

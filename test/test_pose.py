@@ -13,7 +13,7 @@ from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Objective
 from trajplan_ros.search.polish import Linearisation
 from trajplan_ros.search.solution_curve import project_onto_curves, wrap_into
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.cli import main
 
 UR5, PANDA = PUBLISHED['ur5'], PUBLISHED['panda']

@@ -14,8 +14,8 @@ from trajplan_ros.search.active_set import (active_pieces, minimax_step, solve_a
                                             sqp_steps)
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import _active_sets, LARGEST, Linearisation, polish
+from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.bench.chain_bench import local_minimax
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
 
 
 def published(name: str) -> ArmModel:

@@ -7,7 +7,7 @@ import pytest
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET as TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET
 from trajplan_ros.tools.bench.reference import exact_minimum
 
 ARM = paper_arm()

@@ -14,7 +14,7 @@ import pytest
 from trajplan_ros import paper_arm
 from trajplan_ros.kinematics import InvalidArmModel
 from trajplan_ros.ros.settings import default_values, PARAMETERS, Settings
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 import yaml
 
 

@@ -11,8 +11,7 @@ from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import Linearisation
 from trajplan_ros.search.solution_curve import (curve_constraint, curve_seeds, distinct, follow,
                                                 limit_crossings, project_onto_curves)
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET as TARGET
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET, PUBLISHED
 from trajplan_ros.tools.bench.reference import exact_minimum
 
 ARM = paper_arm()

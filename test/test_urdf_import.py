@@ -14,7 +14,7 @@ from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.planning import plan
 from trajplan_ros.search.objective import DEFAULT_OMEGA
-from trajplan_ros.tools.bench.published_arms import PUBLISHED
+from trajplan_ros.tools.bench.cases import PUBLISHED
 import yourdfpy
 
 

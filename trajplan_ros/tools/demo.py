@@ -23,7 +23,7 @@ import subprocess
 import sys
 
 from trajplan_ros.tools.arguments import finite_number, UsageError
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.node_commands import call_planner
 from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, planner_command, PlannerProcess,
                                              ros_environment)

@@ -48,7 +48,7 @@ from rclpy.duration import Duration
 from sensor_msgs.msg import JointState
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning import plan
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
+from trajplan_ros.tools.bench.cases import PAPER_TARGET
 from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, describe_goal, PlannerProcess,
                                              ros_environment, TIMEOUT_S, wait_until)
 from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient

@@ -1,7 +1,13 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The benchmark's goals: seeded random reachable goals, or the paper's target.
+The benchmark's cases: the paper's experiment, published arms, and goals to plan.
+
+The paper's target and Table 5 as printed (``PAPER_TARGET``, ``PAPER_TABLE5``). The published
+arm URDFs that the bench and the tests plan for (``PUBLISHED``), from the example-robot-data
+wheel: the vendors' own files (with their warts: xacro leftovers in names, grippers on side
+branches, ``package://`` meshes), nothing copied or edited, each entry naming the chain the
+bench uses: base link, tip link and how many revolute joints lie between.
 
 Goals are tool positions of seeded random in-limit configurations (in radial mode only those
 with a radial solution); starts are q = 0 or random in-limit configurations. Each case carries
@@ -17,16 +23,70 @@ can be drawn alone (``DRAWS``):
 from __future__ import annotations
 
 from dataclasses import dataclass
+import importlib.metadata
+from pathlib import Path
 
 import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.search.objective import Mode
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TARGET
 from trajplan_ros.tools.bench.reference import exact_minimum, ExactOptimum
 
-__all__ = ['Case', 'DRAWS', 'draw_cases', 'paper_case']
+__all__ = ['Case', 'DRAWS', 'PAPER_TABLE5', 'PAPER_TARGET', 'PUBLISHED', 'PublishedArm',
+           'draw_cases', 'paper_case', 'robots_dir']
+
+#: The target of section VI.B, m (the paper's (151.171, 191.62, 172.124) mm), reached from the
+#: upright pose q = 0.
+PAPER_TARGET = np.array([0.151171, 0.19162, 0.172124])
+PAPER_TARGET.flags.writeable = False
+
+#: Table 5 as printed: algorithm -> (q1..q4 in rad, efficiency scalar F, error in mm).
+PAPER_TABLE5: dict[str, tuple[tuple[float, ...], float, float]] = {
+    'pso': ((-2.24, -1.31, 1.06, -1.11), 8.71e4, 10.41),
+    'spso': ((0.89, 0.12, 1.47, -0.67), 5.52e2, 5.46),
+    'iepso': ((0.9, 1.49, -0.23, 1.17), -16.56, 6.96e-14),
+    'ga': ((0.9, 0.92, 0.84, -1.54), -3.59, 3.06e-4),
+    'de': ((0.9, 0.09, 1.13, -0.09), -2.57, 0.12),
+}
+
+
+@dataclass(frozen=True)
+class PublishedArm:
+    """One arm: its URDF below ``robots_dir()``, the chain from ``base_link`` to ``tip_link``."""
+
+    path: str
+    base_link: str
+    tip_link: str
+    joints: int
+
+    @property
+    def urdf(self) -> Path:
+        """Return the URDF file's path."""
+        return robots_dir() / self.path
+
+
+PUBLISHED = {
+    'so101': PublishedArm('so_arm_description/urdf/so101.urdf', 'base_link',
+                          'gripper_frame_link', 5),
+    'ur5': PublishedArm('ur_description/urdf/ur5_robot.urdf', 'base_link', 'tool0', 6),
+    'xarm7': PublishedArm('xarm_description/urdf/xarm7.urdf', 'link_base', 'link_eef', 7),
+    'panda': PublishedArm('panda_description/urdf/panda.urdf', 'panda_link0', 'panda_hand_tcp',
+                          7),
+    'kinova': PublishedArm('kinova_description/robots/kinova.urdf', 'base',
+                           'j2s6s200_end_effector', 6),
+}
+
+
+def robots_dir() -> Path:
+    """Return the example-robot-data robots folder (the wheel is a test and bench extra)."""
+    try:
+        dist = importlib.metadata.distribution('example-robot-data')
+    except importlib.metadata.PackageNotFoundError:
+        raise FileNotFoundError('example-robot-data is not installed: '
+                                "pip install '.[bench]'") from None
+    return Path(dist.locate_file('cmeel.prefix/share/example-robot-data/robots'))
+
 
 #: The kinds of goals ``draw_cases`` draws.
 DRAWS = ('all', 'limit-optima', 'no-solution')

@@ -47,8 +47,8 @@ from trajplan_ros.search.free_goal import project_onto_goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
 from trajplan_ros.tools.arguments import positive_count
+from trajplan_ros.tools.bench.cases import PUBLISHED, robots_dir
 from trajplan_ros.tools.bench.clearance import IndependentCheck
-from trajplan_ros.tools.bench.published_arms import PUBLISHED, robots_dir
 
 __all__ = ['add_parser', 'add_scene_arguments', 'BenchArm', 'bench_seed', 'draw_goal',
            'draw_scene', 'every_millisecond', 'goal_solutions', 'measure_scenes']

@@ -16,8 +16,7 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.search.fuzzy import RewardPunishment
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, Objective
-from trajplan_ros.tools.bench.cases import Case
-from trajplan_ros.tools.bench.paper_experiment import PAPER_TABLE5, PAPER_TARGET
+from trajplan_ros.tools.bench.cases import Case, PAPER_TABLE5, PAPER_TARGET
 from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCESS_ERROR,
                                              SUCCESS_GAP)
 
@@ -235,13 +234,18 @@ def write_plans_csv(path: str, results: dict[str, Results], cases: Sequence[Case
                                  r.seconds[k], bool(r.success[k])])
 
 
+#: A median plan time more than this fraction above the baseline's is named a slowdown.
+SLOWDOWN = 0.05
+
+
 def format_sameness(results: dict) -> str:
     """
-    Return how the baseline's plans compare with IEPSO's, goal by goal.
+    Return how the baseline's plans compare with IEPSO's, goal by goal, and their speed.
 
     The joint goals bit for bit, and the largest difference of a joint angle and (where the
     results have it) of the motion time: a change that should change no plan (a move of code,
-    a rename) must show all, 0 and 0.
+    a rename) must show all, 0 and 0. Then both median plan times: more than ``SLOWDOWN``
+    slower than the baseline is named so.
     """
     if 'iepso' not in results or 'baseline' not in results:
         return 'baseline: compared with iepso only (add iepso to --algorithms)'
@@ -256,4 +260,9 @@ def format_sameness(results: dict) -> str:
     if hasattr(ours, 'motion_time'):
         difference = np.abs(ours.motion_time - theirs.motion_time)
         line += f', largest motion time difference {float(np.nanmax(difference)):.3g} s'
-    return line
+    mine_s, theirs_s = float(np.median(ours.seconds)), float(np.median(theirs.seconds))
+    change = mine_s / theirs_s - 1.0
+    verdict = (f'SLOWER than the baseline by more than {SLOWDOWN:.0%}' if change > SLOWDOWN
+               else f'not slower than the baseline by more than {SLOWDOWN:.0%}')
+    return (f"{line}\nbaseline: median plan time {1e3 * mine_s:.2f} ms against the baseline's "
+            f'{1e3 * theirs_s:.2f} ms ({_percent(change, 1)}): {verdict}')
