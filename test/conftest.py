@@ -14,6 +14,7 @@ and every node share one DDS domain chosen from the pid, with discovery kept on 
 """
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import signal
@@ -42,6 +43,26 @@ _FIRST = 'test_the_first_run_compiles_and_says_so_later_ones_load'
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Run the cold-start test first: the run then compiles the kernels once, not twice."""
     items.sort(key=lambda item: item.name != _FIRST)
+
+
+@functools.lru_cache(maxsize=None)
+def _every_kernel() -> None:
+    from trajplan_ros.planning import prepare
+
+    prepare()
+
+
+@pytest.fixture(autouse=True)
+def kernels_ready(request: pytest.FixtureRequest) -> None:
+    """
+    Compile or load every kernel, once, before each test but the cold start.
+
+    A command compiles only what its plans need, and says so on stderr: a test that runs one
+    (and reads its stderr, or a README block) sees what a user sees once the kernels are
+    compiled, whatever tests ran before it. The cold-start test, run first, finds none.
+    """
+    if request.node.name != _FIRST:
+        _every_kernel()
 
 
 @pytest.fixture()

@@ -235,6 +235,7 @@ import logging, os, sys
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.search.objective import Mode
+from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import load, METHODS
 root = logging.getLogger()
 before = (list(root.handlers), root.level)

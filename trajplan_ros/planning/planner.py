@@ -381,6 +381,8 @@ def _outcome(obj: Objective, found: OptimizeResult, request: PlanRequest, clock:
         history_efficiency=found.history_fun, history_error=found.history_error, **common)
 
 
+#: The default settings, whose swarm size and iterations bound ``prepare``'s plans.
+_DEFAULTS = PlanRequest((0.0, 0.0, 0.0))
 #: A goal of the paper's arm that every mode reaches, for ``prepare``.
 _WARM_UP_GOAL = (0.151171, 0.19162, 0.172124)
 
@@ -407,7 +409,8 @@ def prepare(*requests: PlanRequest,
     Where that means compiling, ``announce`` is told so first, with about how long it takes;
     the result says what was done. Each request is planned once, to a goal its arm reaches (the
     tool at the middle of its joint limits; in pose mode with that orientation), with its mode
-    and motion law, unbounded in time (a plan cut short would not reach the polish); with a
+    and motion law, unbounded in time (a plan cut short would not reach the polish) but of the
+    default swarm size and iterations (the kernels' types do not depend on them); with a
     world, the paper's arm once among a box instead of that world (whose goals may be blocked
     or need long detours). A kernel's machine code serves every arm.
 
@@ -434,7 +437,8 @@ def prepare(*requests: PlanRequest,
             pose = quaternions(frame[None, :3, :3])[0] if request.mode is Mode.POSE else None
             plan(request.replace(goal=frame[:3, 3], start=None, seed=0, max_planning_time=None,
                                  orientation=pose if pose is not None else request.orientation,
-                                 world=None))
+                                 world=None, population=_DEFAULTS.population,
+                                 max_iterations=_DEFAULTS.max_iterations))
             if request.world is not None:
                 plan(PlanRequest(_WARM_UP_GOAL, seed=0, motion=request.motion,
                                  world=_warm_up_world()))
