@@ -164,38 +164,44 @@ def tool_angle(tool: np.ndarray, ray: np.ndarray, held: int) -> float:
     R_goal) to the reached one (u, w, u x w), atan2(|sum g x a| / 2, (sum g . a - 1) / 2);
     2: the angle between u and ray[0]; 1: u's angle from the plane that ray[1] leaves; 0: 0.
     """
-    u = tool[1]
-    along = u[0] * ray[0, 0] + u[1] * ray[0, 1] + u[2] * ray[0, 2]
-    side = u[0] * ray[1, 0] + u[1] * ray[1, 1] + u[2] * ray[1, 2]
-    up = u[0] * ray[2, 0] + u[1] * ray[2, 1] + u[2] * ray[2, 2]
+    u0, u1, u2 = tool[1, 0], tool[1, 1], tool[1, 2]
+    along = u0 * ray[0, 0] + u1 * ray[0, 1] + u2 * ray[0, 2]
+    side = u0 * ray[1, 0] + u1 * ray[1, 1] + u2 * ray[1, 2]
+    up = u0 * ray[2, 0] + u1 * ray[2, 1] + u2 * ray[2, 2]
     if held == 1:
         return np.arcsin(min(abs(side), 1.0))
     if held == 2:
         return np.arctan2(np.hypot(side, up), along)
     if held < 3:
         return 0.0
-    w = tool[2]
-    v = np.empty((3, 3))                      # the reached frame: u, w, u x w
-    v[0], v[1] = u, w
-    v[2, 0] = u[1] * w[2] - u[2] * w[1]
-    v[2, 1] = u[2] * w[0] - u[0] * w[2]
-    v[2, 2] = u[0] * w[1] - u[1] * w[0]
+    w0, w1, w2 = tool[2, 0], tool[2, 1], tool[2, 2]
+    c0, c1, c2 = u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0     # u x w
     cosine, sx, sy, sz = -1.0, 0.0, 0.0, 0.0
-    for t in range(3):
-        g, a = ray[t], v[t]
-        cosine += g[0] * a[0] + g[1] * a[1] + g[2] * a[2]
-        sx += g[1] * a[2] - g[2] * a[1]
-        sy += g[2] * a[0] - g[0] * a[2]
-        sz += g[0] * a[1] - g[1] * a[0]
+    for t in range(3):                        # g: the goal frame's row t, a: the reached one's
+        a0, a1, a2 = (u0, u1, u2) if t == 0 else (w0, w1, w2) if t == 1 else (c0, c1, c2)
+        g0, g1, g2 = ray[t, 0], ray[t, 1], ray[t, 2]
+        cosine += g0 * a0 + g1 * a1 + g2 * a2
+        sx += g1 * a2 - g2 * a1
+        sy += g2 * a0 - g0 * a2
+        sz += g0 * a1 - g1 * a0
     return np.arctan2(0.5 * np.sqrt(sx * sx + sy * sy + sz * sz), 0.5 * cosine)
+
+
+@inlined_kernel
+def tool_at(rows: np.ndarray, k: int, tool: np.ndarray) -> np.ndarray:
+    """Copy tool ``k`` of ``rows`` (V, N, 3) into ``tool`` (V, 3), a buffer kept across tools."""
+    for t in range(rows.shape[0]):
+        for a in range(3):
+            tool[t, a] = rows[t, k, a]
+    return tool
 
 
 @kernel
 def tool_angles(rows: np.ndarray, ray: np.ndarray, held: int) -> np.ndarray:
     """Return ``tool_angle`` at each of the tools ``rows`` (V, N, 3)."""
-    out = np.empty(rows.shape[1])
+    out, tool = np.empty(rows.shape[1]), np.empty((rows.shape[0], 3))
     for k in range(rows.shape[1]):
-        out[k] = tool_angle(rows[:, k], ray, held)
+        out[k] = tool_angle(tool_at(rows, k, tool), ray, held)
     return out
 
 
@@ -209,12 +215,12 @@ def errors_eq11(rows: np.ndarray, goal: np.ndarray, ray: np.ndarray, held: int,
     gives them. The error adds (L angle)^2 to the squared position error, with the angle of
     ``tool_angle`` (``ray``, ``held``) and L = ``reach``.
     """
-    out = np.empty(rows.shape[1])
+    out, tool = np.empty(rows.shape[1]), np.empty((rows.shape[0], 3))
     for k in range(rows.shape[1]):
         sq = 0.0
         for a in range(3):
             sq += (rows[0, k, a] - goal[a]) ** 2
-        sq += (reach * tool_angle(rows[:, k], ray, held)) ** 2
+        sq += (reach * tool_angle(tool_at(rows, k, tool), ray, held)) ** 2
         out[k] = np.sqrt(sq)
     return out
 
