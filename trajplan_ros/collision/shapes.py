@@ -214,4 +214,7 @@ def _read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
         raise InvalidCollisionInput(f'mesh {path}: not readable: {exc}') from None
     if not isinstance(mesh, trimesh.Trimesh):
         raise InvalidCollisionInput(f'mesh {path}: no triangles')
+    # an STL file repeats each vertex for every triangle at it: one copy of each is enough
+    # (the same triangles), and holds the hulls and hierarchies built on it to a third
+    mesh.merge_vertices(merge_tex=True, merge_norm=True)
     return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
