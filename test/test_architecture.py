@@ -9,6 +9,7 @@ above, and the import graph between our modules has no cycles. Nothing below ``r
 ROS.
 """
 import ast
+import importlib
 from pathlib import Path
 import re
 
@@ -143,3 +144,9 @@ def test_no_test_module_imports_another(path: Path) -> None:
         for name in names:
             assert not (name.startswith('test_') or name == 'conftest'), \
                 f'{path.name} imports {name}'
+
+
+@pytest.mark.parametrize('name', sorted(modules()))
+def test_every_module_imports(name: str) -> None:
+    # a command nothing else imports (the node benchmarks) must not rot unseen
+    importlib.import_module(name)

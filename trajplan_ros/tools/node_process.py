@@ -21,7 +21,7 @@ from typing import Callable, Mapping, Sequence
 
 
 __all__ = ['COMPILE_BOUND_S', 'TIMEOUT_S', 'PlannerProcess', 'planner_command',
-           'ros_environment', 'wait_until']
+           'ros_environment', 'rss_mb', 'wait_until']
 
 #: Liveness bound (s) for anything a client waits on by default: discovery, an answer.
 TIMEOUT_S = 60.0
@@ -38,6 +38,15 @@ def wait_until(predicate: Callable[[], bool], timeout: float = TIMEOUT_S,
         if time.monotonic() > deadline:
             raise TimeoutError(f'timed out after {timeout:g} s waiting for {what}')
         tick.wait(0.02)
+
+
+def rss_mb(pid: int, field: str = 'VmRSS') -> float:
+    """Return the resident memory of process ``pid``, MB (``VmHWM``: its peak so far)."""
+    with open(f'/proc/{pid}/status', encoding='ascii') as status:
+        for line in status:
+            if line.startswith(field + ':'):
+                return int(line.split()[1]) / 1024
+    return float('nan')
 
 
 def planner_command(executable: str = 'planner_node') -> list[str]:

@@ -48,9 +48,10 @@ from rclpy.duration import Duration
 from sensor_msgs.msg import JointState
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning import plan
+from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.tools.bench.cases import PAPER_TARGET
-from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, describe_goal, PlannerProcess,
-                                             ros_environment, TIMEOUT_S, wait_until)
+from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, PlannerProcess, ros_environment,
+                                             rss_mb, TIMEOUT_S, wait_until)
 from trajplan_ros.tools.ros_client import KEEP_ALL, plan_request, RosClient
 
 
@@ -68,15 +69,6 @@ def _goals(count: int, seed: int) -> list[tuple[float, float, float]]:
     if len({describe_goal(g) for g in out}) != count:
         raise RuntimeError('goals collide in the node log format; pick another --seed')
     return out
-
-
-def _rss_mb(pid: int, field: str = 'VmRSS') -> float:
-    """Resident memory of a process, MB (VmHWM: its peak)."""
-    with open(f'/proc/{pid}/status', encoding='ascii') as status:
-        for line in status:
-            if line.startswith(field + ':'):
-                return int(line.split()[1]) / 1024
-    return float('nan')
 
 
 class _ParameterPoller:
@@ -329,7 +321,7 @@ def extremes(env: dict[str, str]) -> Result:
     try:
         for goal in [(0.2, 0.1, 0.15), tuple(PAPER_TARGET.tolist()), (0.01, 0.0, 0.36)]:
             ros.call(GetPlan, 'plan_trajectory', plan_request(goal), TIMEOUT_S + 30)
-        peak = _rss_mb(node.pid, 'VmHWM')
+        peak = rss_mb(node.pid, 'VmHWM')
     finally:
         ros.close()
         node.stop()
@@ -378,7 +370,7 @@ def fuzz(env: dict[str, str], count: int) -> Result:
     ros = RosClient('stress_fuzz')
     target = tuple(PAPER_TARGET.tolist())
     try:
-        before = _rss_mb(node.pid)
+        before = rss_mb(node.pid)
         publishers = {'goal': ros.publisher(Point, 'goal'),
                       'joint_states': ros.publisher(JointState, 'joint_states')}
         for topic, msg in _fuzz_messages(count, seed=400):
@@ -390,7 +382,7 @@ def fuzz(env: dict[str, str], count: int) -> Result:
         answer = ros.call(GetPlan, 'plan_trajectory', plan_request(target))
         logged = node.wait_for(r'service call #\d+ \(0.151171, 0.19162, 0.172124\) m from q = '
                                r'\(([^)]*)\) rad.*: (reached in \S+ s)', TIMEOUT_S)
-        grown = _rss_mb(node.pid) - before
+        grown = rss_mb(node.pid) - before
     finally:
         ros.close()
         node.stop()
@@ -418,7 +410,7 @@ def sequence(env: dict[str, str], count: int) -> Result:
         for k, goal in enumerate(_goals(count, seed=500), start=1):
             ros.call(GetPlan, 'plan_trajectory', plan_request(goal))
             if k in (100, count):
-                rss[k] = _rss_mb(node.pid)
+                rss[k] = rss_mb(node.pid)
     finally:
         ros.close()
         node.stop()
