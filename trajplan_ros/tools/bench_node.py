@@ -296,9 +296,10 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
 def _start_phase(node: PlannerProcess, ros: RosClient, began: float, goal: np.ndarray,
                  scene: bool) -> bool:
     """
-    Print when the service was offered, the first plan answered and the node ready; met?
+    Print when the service was offered, the first plan answered and the node ready.
 
-    The first call goes to ``compute_plan`` (never published: the node's start stays).
+    The first call goes to ``compute_plan`` (never published: the node's start stays). True
+    when every target is met.
     """
     offered = time.perf_counter() - began
     first, _ = _timed_call(ros, ros.client(GetPlan, 'compute_plan'), plan_request(tuple(goal)),
