@@ -243,9 +243,10 @@ def linearise_at(problem: Problem, x: np.ndarray, weight: float, nulls: int) -> 
 @inlined_kernel
 def clip_to_box(problem: Problem, x: np.ndarray) -> None:
     """Clip x (K, planned) to the search box, in place."""
+    lower, upper = problem.lower, problem.upper      # once: each field read takes a reference
     for k in range(x.shape[0]):
         for i in range(x.shape[1]):
-            x[k, i] = min(max(x[k, i], problem.lower[i]), problem.upper[i])
+            x[k, i] = min(max(x[k, i], lower[i]), upper[i])
 
 
 @inlined_kernel

@@ -437,6 +437,8 @@ def curve_keys(points: np.ndarray, tool: np.ndarray, obj: Problem, by_time: bool
     """
     k, count, dim = points.shape
     key = np.full((k, count), np.inf)
+    # taken out of ``obj`` once: a field read in the loop takes a reference to its arrays each time
+    start, law, omega, ray, held = obj.start, obj.law, obj.omega, obj.ray, obj.across.shape[0]
     for r in range(k):
         for j in range(count):
             if np.isnan(points[r, j, 0]):
@@ -444,12 +446,12 @@ def curve_keys(points: np.ndarray, tool: np.ndarray, obj: Problem, by_time: bool
             if by_time:
                 largest, travel = 0.0, 0.0
                 for i in range(dim):
-                    moved = abs(points[r, j, i] - obj.start[i])
-                    largest = max(largest, joint_time(obj.law, i, moved))
+                    moved = abs(points[r, j, i] - start[i])
+                    largest = max(largest, joint_time(law, i, moved))
                     travel += moved
-                key[r, j] = largest + 1e-6 * travel / obj.omega
+                key[r, j] = largest + 1e-6 * travel / omega
             else:
-                key[r, j] = tool_angle(tool[r * count + j], obj.ray, obj.across.shape[0])
+                key[r, j] = tool_angle(tool[r * count + j], ray, held)
     return key
 
 
