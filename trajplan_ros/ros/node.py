@@ -504,12 +504,13 @@ class PlannerNode(Node):
         """
         Make the kernels of plans with ``settings`` ready before one runs on the plan's clock.
 
-        Once for each kind of plan (mode, pose goals, scene, profile): other settings' kernels
-        (another mode, a scene) are compiled or loaded when settings first need them.
+        Once for each kind of plan (mode, pose goals, scene, profile, algorithm): other
+        settings' kernels (another mode, a scene) are compiled or loaded when settings first
+        need them.
         """
         r = settings.request
         pose = settings.goal_orientation == 'pose'
-        kind = (r.mode, pose, r.world is not None, r.motion.profile)
+        kind = (r.mode, pose, r.world is not None, r.motion.profile, r.algorithm)
         if kind in self._prepared:
             return
         requests = [r, r.replace(mode=Mode.POSE)] if pose else [r]
