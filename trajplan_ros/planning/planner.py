@@ -417,7 +417,7 @@ def prepare(*requests: PlanRequest,
     Without requests, every kernel: the paper's arm in each mode of a point goal, among a box,
     and a made-up six-joint arm in free mode and to a pose (the polish's SQP step), as the
     benchmarks and the command's first plan want. The node prepares its settings' requests
-    only: the paper's arm without a scene needs no collision kernel and loads a third of them.
+    only: the paper's arm without a scene needs no collision kernel.
     """
     def every_plan() -> None:
         for mode in (Mode.FREE, Mode.RADIAL, Mode.APPROACH):
