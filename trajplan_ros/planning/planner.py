@@ -434,10 +434,11 @@ def prepare(*requests: PlanRequest,
             arm = request.planned_arm
             middle = (arm.lower + arm.upper) / 2
             frame = arm.frames(np.where(np.isfinite(middle), middle, 0.0))[0, -1]
-            pose = quaternions(frame[None, :3, :3])[0] if request.mode is Mode.POSE else None
+            orientation = (quaternions(frame[None, :3, :3])[0] if request.mode is Mode.POSE
+                           else request.orientation)
             plan(request.replace(goal=frame[:3, 3], start=None, seed=0, max_planning_time=None,
-                                 orientation=pose if pose is not None else request.orientation,
-                                 world=None, population=_DEFAULTS.population,
+                                 orientation=orientation, world=None,
+                                 population=_DEFAULTS.population,
                                  max_iterations=_DEFAULTS.max_iterations))
             if request.world is not None:
                 plan(PlanRequest(_WARM_UP_GOAL, seed=0, motion=request.motion,

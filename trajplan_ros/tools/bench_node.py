@@ -138,9 +138,7 @@ def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
     """
     trips, sizes = [], []
     for i, goal in enumerate(goals):
-        request = GetPlan.Request()
-        request.goal.pose.position = Point(x=float(goal[0]), y=float(goal[1]), z=float(goal[2]))
-        answer, trip = _timed_call(ros, client, request)
+        answer, trip = _timed_call(ros, client, plan_request(tuple(goal)))
         if answer is None:
             return f'no answer within {TIMEOUT_S:.0f} s for goal {describe_goal(goal)}'
         trips.append(trip)
