@@ -7,7 +7,8 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ['QUATERNION_SLACK', 'quaternions', 'rotation_matrix', 'unit_quaternion']
+__all__ = ['QUATERNION_SLACK', 'quaternions', 'rotation_matrix', 'rotation_vector',
+           'unit_quaternion']
 
 #: How far from 1 a quaternion's norm may be (rounded decimals in a file or a message).
 QUATERNION_SLACK = 1e-3
@@ -41,6 +42,14 @@ def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def rotation_vector(rotation: Sequence[float]) -> np.ndarray:
+    """Return the unit quaternion (x, y, z, w) of a rotation vector (its axis times its angle)."""
+    v = np.asarray(rotation, dtype=float)
+    angle = float(np.linalg.norm(v))
+    along = v * (0.5 if angle < 1e-8 else np.sin(0.5 * angle) / angle)
+    return np.append(along, np.cos(0.5 * angle))
 
 
 def quaternions(rot: np.ndarray) -> np.ndarray:

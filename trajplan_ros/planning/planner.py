@@ -18,7 +18,7 @@ far, as TIMED_OUT or CANCELLED.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 import time
 from typing import Any, Callable, Sequence
@@ -42,6 +42,7 @@ from trajplan_ros.search.detour import detour
 from trajplan_ros.search.free_goal import free_joint_goal
 from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
+from trajplan_ros.search.region import Region, within_tolerances
 
 __all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
            'PlanResult', 'PlanStatus', 'describe_goal', 'describe_residual', 'plan', 'prepare']
@@ -201,6 +202,7 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
     obj, found = _search(obj, r, interrupt)
+    found = _fastest_within(obj, found, r)
     result = _outcome(obj, found, r, clock, common)
     if obj.start_notes:
         result.message += f"; {'; '.join(obj.start_notes)}: the motion brings it inside"
@@ -232,6 +234,24 @@ def _search(obj: Objective, r: PlanRequest,
                                               and one.axis_angle(tool[1])[0] <= r.axis_limit)):
             return one, found
     return obj, search(obj)
+
+
+def _fastest_within(obj: Objective, found: OptimizeResult, r: PlanRequest) -> OptimizeResult:
+    """
+    Return the search's answer moved to the fastest joint goal inside the goal's tolerances.
+
+    Only an answer that reached the goal, and was not cut short, moves (``search.region``).
+    """
+    tool = obj.tool(found.x[None])
+    if (found.interrupted is not None or np.linalg.norm(tool[0, 0] - obj.goal) > r.tolerance
+            or obj.holds_axis and obj.angle_errors(tool)[0] > r.angle_limit):
+        return found
+    x = within_tolerances(obj, found.x, Region(r.tolerance, r.angle_limit))
+    if x is found.x:
+        return found
+    ev = obj(x[None])
+    return replace(found, x=x, fun=float(ev.efficiency[0]), motion_time=float(ev.motion_time[0]),
+                   error=float(ev.error[0]))
 
 
 def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:

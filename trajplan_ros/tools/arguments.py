@@ -13,11 +13,17 @@ from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
+from trajplan_ros.planning.request import (DEFAULT_AXIS_TOLERANCE,
+                                           DEFAULT_ORIENTATION_TOLERANCE, DEFAULT_TOLERANCE)
 from trajplan_ros.search.objective import DEFAULT_OMEGA
 
-__all__ = ['UsageError', 'add_arm_arguments', 'add_collision_arguments', 'add_motion_arguments',
-           'arm_from_arguments', 'finite_number', 'motion_from_arguments', 'package_share',
-           'positive_count', 'world_from_arguments']
+__all__ = ['TOLERANCES', 'UsageError', 'add_arm_arguments', 'add_collision_arguments',
+           'add_motion_arguments', 'add_tolerance_arguments', 'arm_from_arguments',
+           'finite_number', 'motion_from_arguments', 'package_share', 'positive_count',
+           'tolerances_from_arguments', 'world_from_arguments']
+
+#: The goal's tolerances by ``PlanRequest``'s names (the flags: --tolerance, ...).
+TOLERANCES = ('tolerance', 'axis_tolerance', 'orientation_tolerance')
 
 
 class UsageError(Exception):
@@ -107,6 +113,28 @@ def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
                                    max_jerk=args.max_jerk,
                                    velocity_scaling=args.velocity_scaling,
                                    acceleration_scaling=args.acceleration_scaling)
+
+
+def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the goal's tolerances: the region the plan reaches fastest (``PlanRequest``)."""
+    group = parser.add_argument_group(
+        "the goal's tolerances (the plan is the fastest motion into the region they make)")
+    group.add_argument('--tolerance', type=finite_number, metavar='M',
+                       help='largest distance of the tool point from the goal '
+                            f'(default {DEFAULT_TOLERANCE:g})')
+    group.add_argument('--axis-tolerance', type=finite_number, metavar='RAD',
+                       help='largest angle between the tool axis and the goal ray (radial) or '
+                            'the approach direction (default '
+                            + ', '.join(f'{k} {v:g}' for k, v in DEFAULT_AXIS_TOLERANCE.items())
+                            + ')')
+    group.add_argument('--orientation-tolerance', type=finite_number, metavar='RAD',
+                       help='largest angle of the rotation between the goal orientation and '
+                            f"the tool's (default {DEFAULT_ORIENTATION_TOLERANCE:g})")
+
+
+def tolerances_from_arguments(args: argparse.Namespace) -> dict[str, float]:
+    """Return the tolerances given on the command line, by ``PlanRequest``'s names."""
+    return {name: getattr(args, name) for name in TOLERANCES if getattr(args, name) is not None}
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser) -> None:

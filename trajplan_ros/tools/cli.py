@@ -14,16 +14,16 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
-from trajplan_ros.planning import DEFAULT_ORIENTATION_TOLERANCE
-from trajplan_ros.planning.planner import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_TOLERANCE, describe_residual, plan,
-                                           PlanRequest, PlanResult, PlanStatus, prepare)
+from trajplan_ros.planning.planner import (ALGORITHMS, describe_residual, plan, PlanRequest,
+                                           PlanResult, PlanStatus, prepare)
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
-                                          add_motion_arguments, arm_from_arguments,
-                                          finite_number, motion_from_arguments, positive_count,
-                                          UsageError, world_from_arguments)
+                                          add_motion_arguments, add_tolerance_arguments,
+                                          arm_from_arguments, finite_number,
+                                          motion_from_arguments, positive_count,
+                                          tolerances_from_arguments, UsageError,
+                                          world_from_arguments)
 from trajplan_ros.tools.bench import collision_bench, detour_bench
 
 
@@ -55,18 +55,7 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                    help="the tool frame's orientation in the base frame, a unit quaternion")
     p.add_argument('--algorithm', choices=list(ALGORITHMS), default='iepso')
     p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
-    p.add_argument('--tolerance', type=finite_number, default=DEFAULT_TOLERANCE,
-                   help='largest error in metres that counts as reached '
-                        f'(default {DEFAULT_TOLERANCE})')
-    p.add_argument('--axis-tolerance', type=finite_number, metavar='RAD',
-                   help='largest angle between the tool axis and the goal ray (radial) or the '
-                        'approach direction that counts as met (default '
-                        + ', '.join(f'{k} {v:g}' for k, v in DEFAULT_AXIS_TOLERANCE.items())
-                        + ')')
-    p.add_argument('--orientation-tolerance', type=finite_number, metavar='RAD',
-                   default=DEFAULT_ORIENTATION_TOLERANCE,
-                   help='largest angle of the rotation between the goal orientation and the '
-                        'reached one that counts as met (default %(default)s)')
+    add_tolerance_arguments(p)
     p.add_argument('--start-limit-margin', type=finite_number, default=0.05, metavar='RAD',
                    help='a start joint this far outside its limits is planned from, the motion '
                         'bringing it inside (default %(default)s)')
@@ -266,10 +255,9 @@ def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
             raise UsageError(f'--{flag} needs --mode {needs}, not {mode}')
     request = PlanRequest(
         (), arm=arm, mode=mode, approach=args.approach or TOP_DOWN,
-        orientation=args.orientation, orientation_tolerance=args.orientation_tolerance,
-        motion=motion_from_arguments(args), angular_velocity=args.angular_velocity,
-        world=world_from_arguments(args, arm), tolerance=args.tolerance,
-        axis_tolerance=args.axis_tolerance, algorithm=args.algorithm, seed=args.seed,
+        orientation=args.orientation, motion=motion_from_arguments(args),
+        angular_velocity=args.angular_velocity, world=world_from_arguments(args, arm),
+        **tolerances_from_arguments(args), algorithm=args.algorithm, seed=args.seed,
         max_planning_time=args.max_planning_time, start_limit_margin=args.start_limit_margin,
         detours=args.detours)
     request.validate()

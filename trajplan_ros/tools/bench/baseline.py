@@ -12,7 +12,7 @@ pipe between the two costs the row nothing (it plans once, untimed, for each arm
 process compiles or loads its kernels first). The arm goes to the child as its arrays, so that
 every version plans exactly this arm; only the API the versions share is used: ``ArmModel``'s
 constructor and ``plan(goal, start, arm=, mode=, seed=)`` (and ``orientation=`` for a pose,
-which only versions that plan poses take).
+which only versions that plan poses take, and the tolerances given).
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ import os
 from pathlib import Path
 import subprocess
 import sys
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -50,9 +50,10 @@ for line in sys.stdin:
         print(json.dumps({}), flush=True)
         continue
     clock = time.perf_counter()
-    pose = {'orientation': request['orientation']} if 'orientation' in request else {}
+    given = {k: request[k] for k in ('orientation', 'tolerance', 'axis_tolerance',
+                                     'orientation_tolerance') if k in request}
     result = plan(request['goal'], request['start'], arm=arm, mode=request['mode'],
-                  seed=request['seed'], **pose)
+                  seed=request['seed'], **given)
     seconds = time.perf_counter() - clock
     joints = None if result.joint_goal is None else result.joint_goal.tolist()
     print(json.dumps({'joints': joints, 'seconds': seconds, 'message': result.message}),
@@ -99,8 +100,8 @@ class _Child:
         return json.loads(line)
 
     def solve(self, arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray,
-              seed: int, profile: MotionProfile, orientation: np.ndarray | None = None
-              ) -> Answer:
+              seed: int, profile: MotionProfile, orientation: np.ndarray | None = None,
+              tolerances: Mapping[str, float] | None = None) -> Answer:
         """
         Plan ``goal`` from ``start`` in the child; the answer carries the child's time.
 
@@ -115,6 +116,7 @@ class _Child:
                    'seed': int(seed)}
         if orientation is not None:
             request['orientation'] = np.asarray(orientation, float).tolist()
+        request.update(tolerances or {})
         answer = self._ask(request)
         if answer['joints'] is None:
             raise ValueError(f"the baseline rejected goal {list(goal)}: {answer['message']}")

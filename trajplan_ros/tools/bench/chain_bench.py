@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import time
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 import warnings
 
 import numpy as np
@@ -39,12 +39,14 @@ from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import joint_reach, SERVO
 from trajplan_ros.planning.request import DEFAULT_AXIS_TOLERANCE
 from trajplan_ros.search.objective import InvalidRequest, Mode, Objective, TOP_DOWN
+from trajplan_ros.search.region import Region
 from trajplan_ros.tools.bench.methods import Answer, Method
 from trajplan_ros.tools.bench.report import format_table
 from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP
 
 __all__ = ['ChainCase', 'ChainResults', 'IndependentFk', 'draw_chain_cases', 'format_chain',
-           'ikpy_method', 'local_minimax', 'minimax_reference', 'run_chain']
+           'ikpy_method', 'local_minimax', 'minimax_reference', 'region_minimax',
+           'region_reference', 'run_chain', 'tolerance_region']
 
 
 @dataclass(frozen=True)
@@ -148,6 +150,84 @@ def local_minimax(obj: Objective, x0: np.ndarray) -> np.ndarray | None:
     return x
 
 
+def region_minimax(obj: Objective, x0: np.ndarray, region: Region) -> np.ndarray | None:
+    """
+    Return SLSQP's least-time joint goal inside ``region`` about ``obj``'s goal from x0.
+
+    Region radii of 0 hold that part exactly (the position residuals the joints can change,
+    or the axis's or orientation's residuals). Inside: |p - g| <= r_p; the angle of the tool
+    axis to its target, or of the rotation to the goal orientation, at most r_a (by its
+    cosine: u . target, or (trace(R_goal^T R) - 1) / 2). Each inequality is scaled to a
+    gradient of order one on its boundary. None when SLSQP ends outside the region.
+    """
+    from scipy.optimize import minimize
+
+    m, s = obj.lower.size, obj.start[: obj.lower.size]
+    count = 3 + len(obj.across_basis)
+    held = np.flatnonzero(np.r_[np.full(3, region.position == 0.0),
+                                np.full(count - 3, region.angle == 0.0)])
+    reach, (rows, _, _) = _reach(obj), _moving_rows(obj, held)
+
+    def tool(z: np.ndarray) -> np.ndarray:
+        return obj.tool(z[None, :m])
+
+    def inside(z: np.ndarray) -> np.ndarray:
+        t = tool(z)
+        out = [np.append(reach(z[-1])[0] - (z[:m] - s), reach(z[-1])[0] + (z[:m] - s))]
+        if region.position > 0.0:
+            d = t[0, 0] - obj.goal
+            out.append([(region.position ** 2 - d @ d) / region.position])
+        if region.angle > 0.0:
+            out.append([(_cosine(obj, t) - np.cos(region.angle)) / np.sin(region.angle)])
+        return np.concatenate(out)
+
+    def exact(z: np.ndarray) -> np.ndarray:
+        return rows @ obj.residuals(tool(z))[0][held]
+
+    constraints = [{'type': 'ineq', 'fun': inside}]
+    if held.size:
+        constraints.append({'type': 'eq', 'fun': exact})
+    bounds = list(zip(obj.lower, obj.upper)) + [(0.0, obj.longest_time)]
+    z0 = np.append(x0, obj.motion_time(x0[None])[0])
+    found = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(m + 1)[-1], method='SLSQP',
+                     bounds=bounds, constraints=constraints,
+                     options={'maxiter': 300, 'ftol': 1e-14})
+    x = np.clip(found.x[:m], obj.lower, obj.upper)
+    t = tool(np.append(x, 0.0))
+    ok = (np.linalg.norm(t[0, 0] - obj.goal) <= max(region.position, 1e-9) * (1 + 1e-9)
+          and (not obj.holds_axis
+               or obj.angle_errors(t)[0] <= max(region.angle, 1e-9) * (1 + 1e-9)))
+    return x if ok else None
+
+
+def _cosine(obj: Objective, tool: np.ndarray) -> float:
+    """Return the cosine of the angle the mode holds at ``tool`` (V, 1, 3) (``region_minimax``)."""
+    if obj.mode is not Mode.POSE:
+        return float(tool[1, 0] @ obj.axis_target)
+    u, w = tool[1, 0], tool[2, 0]
+    a, b, c = obj.ray_basis
+    return float((a @ u + b @ w + c @ np.cross(u, w) - 1.0) / 2.0)
+
+
+def region_reference(obj: Objective, region: Region, rng: np.random.Generator,
+                     starts: int, exact: np.ndarray) -> tuple[float, np.ndarray]:
+    """
+    Return the least motion time ``region_minimax`` finds, and its joint goal.
+
+    From ``exact`` (the exact reference's joint goal, inside the region: the answer when none
+    is faster), the start and ``starts`` random points.
+    """
+    best_time, best = float(obj.motion_time(exact[None])[0]), exact
+    start = np.clip(obj.start[: obj.lower.size], obj.lower, obj.upper)
+    for x0 in np.vstack((exact, start,
+                         rng.uniform(obj.lower, obj.upper, (starts, obj.lower.size)))):
+        x = region_minimax(obj, x0, region)
+        t = np.inf if x is None else obj.motion_time(x[None])[0]
+        if t < best_time:
+            best_time, best = t, x
+    return best_time, best
+
+
 def _reach(obj: Objective) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
     """
     Return t -> (t_i^-1(t), its derivative) for each planned joint, from ``time_law``'s kernel.
@@ -165,6 +245,13 @@ def _reach(obj: Objective) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
               for x in (t, t - h, t + h)]
         return np.array(at[0]), (np.array(at[2]) - np.array(at[1])) / (2.0 * h)
     return reach
+
+
+def tolerance_region(tolerances: Mapping[str, float], mode: Mode) -> Region:
+    """Return the region of the given ``tolerances`` (0: exact, where not given)."""
+    angle = 'orientation_tolerance' if mode is Mode.POSE else 'axis_tolerance'
+    return Region(tolerances.get('tolerance', 0.0),
+                  tolerances.get(angle, 0.0) if mode is not Mode.FREE else 0.0)
 
 
 def axis_limit(mode: Mode) -> float:
@@ -192,9 +279,12 @@ def _on_goal(obj: Objective, x: np.ndarray) -> np.ndarray | None:
     return x if ok else None
 
 
-def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
+def _moving_rows(obj: Objective, held: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, int, np.ndarray]:
     """
     Return a basis (rows) of the residuals the joints can change, their rank, the idle joints.
+
+    ``held``: of those residuals only (indices; None: all).
 
     On a planar arm the position residual across the plane never changes: SLSQP fails on such
     a redundant equality ("singular matrix"), so the reference holds only the others (the
@@ -205,6 +295,7 @@ def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
     x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (16, obj.lower.size))
     d = obj.tool_jacobian(x)
     jac = obj.linear_residuals(*(np.swapaxes(j, 1, 2) for j in d.jacobians()))  # (16, m, r)
+    jac = jac if held is None else jac[..., held]
     u, sv, _ = np.linalg.svd(np.concatenate(jac, axis=0).T, full_matrices=False)
     rank = int(np.max(np.linalg.matrix_rank(jac, tol=1e-9 * sv[0])))
     idle = np.all(np.abs(jac) <= 1e-9 * sv[0], axis=(0, 2))
@@ -215,12 +306,16 @@ def _moving_rows(obj: Objective) -> tuple[np.ndarray, int, np.ndarray]:
 
 def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
                      starts: int = 24, progress: Callable[[], object] | None = None,
-                     profile: MotionProfile | None = None) -> tuple[list[ChainCase], int]:
+                     profile: MotionProfile | None = None,
+                     region: Region | None = None) -> tuple[list[ChainCase], int]:
     """
     Draw ``n`` goals and their references (module docstring); also return how many were dropped.
 
     A goal is dropped when the reference finds no pose for it (radial mode: no radial pose;
-    approach mode, from above: none, or the goal is below the base, z < 0).
+    approach mode, from above: none, or the goal is below the base, z < 0). With a ``region``
+    (the goal's tolerances) the reference is then the least time inside it
+    (``region_reference``, from the exact one's joint goal and ``starts`` more points, drawn
+    from the plan's seed: the same goals whatever the region).
     """
     rng = np.random.default_rng(seed)
     low, high = _box(arm)
@@ -253,6 +348,9 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
         if best is None:
             dropped += 1
             continue
+        if region is not None:
+            best_time, best = region_reference(obj, region, np.random.default_rng(plan_seed),
+                                               starts, best)
         cases.append(ChainCase(goal, start, plan_seed, best_time, obj.full(best)[0],
                                orientation))
         if progress is not None:
@@ -302,11 +400,12 @@ class ChainResults:
     gap: np.ndarray            # R / reference - 1
     seconds: np.ndarray        # wall time per plan, s
     axis_limit: float = SUCCESS_AXIS_ERROR     # the largest axis error reached (``axis_limit``)
+    error_limit: float = SUCCESS_ERROR         # the largest position error reached
 
     @property
     def reached(self) -> np.ndarray:
         """Tell for each case whether the answer meets the goal (and the axis, if held)."""
-        return (self.error <= SUCCESS_ERROR) & (self.axis_error <= self.axis_limit)
+        return (self.error <= self.error_limit) & (self.axis_error <= self.axis_limit)
 
     @property
     def success(self) -> np.ndarray:
@@ -328,7 +427,8 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
     state: dict[str, object] = {}
 
     def solve(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
+              profile: MotionProfile, orientation: np.ndarray | None = None,
+              tolerances: Mapping[str, float] | None = None) -> Answer:
         if 'chain' not in state:
             import ikpy.chain
 
@@ -357,11 +457,11 @@ def ikpy_method(urdf: str, arm: ArmModel) -> Method:
                   'minimisation)', solve, 'ikpy', 'ikpy.chain')
 
 
-def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: MotionProfile
-          ) -> tuple[np.ndarray, float | None]:
+def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: MotionProfile,
+          tolerances: Mapping[str, float]) -> tuple[np.ndarray, float | None]:
     """Return the method's answer as every joint's angle, and its own time if it has one."""
     answer = method.solve(arm, mode, case.goal, case.start, case.seed, profile,
-                          orientation=case.orientation)
+                          orientation=case.orientation, tolerances=tolerances)
     if answer.joints is not None:
         return answer.joints, answer.seconds
     if answer.plan is not None:
@@ -373,18 +473,27 @@ def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: M
 
 def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmModel,
               mode: Mode, fk: IndependentFk, step: Callable[[], object] | None = None,
-              profile: MotionProfile | None = None) -> dict[str, ChainResults]:
-    """Run every method on every case, taking turns goal by goal; score by ``fk``."""
-    n = len(cases)
+              profile: MotionProfile | None = None,
+              tolerances: Mapping[str, float] | None = None) -> dict[str, ChainResults]:
+    """
+    Run every method on every case, taking turns goal by goal; score by ``fk``.
+
+    ``tolerances``: the plans' ``tolerance``, ``axis_tolerance``, ``orientation_tolerance``
+    (those given); an answer within them counts as reached.
+    """
+    n, tolerances = len(cases), dict(tolerances or {})
+    region = tolerance_region(tolerances, mode)
+    limits = (max(axis_limit(mode), region.angle * (1.0 + 1e-9)),
+              max(SUCCESS_ERROR, region.position * (1.0 + 1e-9)))
     out = {m.name: ChainResults(np.full((n, arm.n_joints), np.nan),
-                                *(np.full(n, np.nan) for _ in range(4)), axis_limit(mode))
+                                *(np.full(n, np.nan) for _ in range(4)), *limits)
            for m in methods}
     for k, case in enumerate(cases):
         obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
                         orientation=case.orientation)
         for method in methods:
             clock = time.perf_counter()
-            q, seconds = _full(arm, method, mode, case, obj.profile)
+            q, seconds = _full(arm, method, mode, case, obj.profile, tolerances)
             res = out[method.name]
             res.seconds[k] = time.perf_counter() - clock if seconds is None else seconds
             res.q[k] = q

@@ -32,12 +32,13 @@ from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import prepare
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
-                                          arm_from_arguments, motion_from_arguments,
-                                          positive_count, UsageError)
+                                          add_tolerance_arguments, arm_from_arguments,
+                                          motion_from_arguments, positive_count,
+                                          tolerances_from_arguments, UsageError)
 from trajplan_ros.tools.bench.baseline import baseline_method
 from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
 from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain, ikpy_method,
-                                                  IndependentFk, run_chain)
+                                                  IndependentFk, run_chain, tolerance_region)
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
@@ -109,6 +110,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help='with --urdf: SLSQP starts of the reference per goal (default 24)')
     add_arm_arguments(p)
     add_motion_arguments(p)
+    add_tolerance_arguments(p)
     p.set_defaults(run=_run)
 
 
@@ -216,10 +218,15 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
           f'{args.seed}; reference: best of {args.reference_starts} SLSQP starts per goal.'
           + _motion_note(args))
     fk = IndependentFk(args.urdf, arm)
+    tolerances = tolerances_from_arguments(args)
+    region = tolerance_region(tolerances, mode) if tolerances else None
+    if region is not None:
+        print(f'tolerances {tolerances}: the reference is the least time inside their region '
+              '(SLSQP from the exact reference, the start and as many random points).')
     try:
         cases, dropped = draw_chain_cases(arm, n, mode=mode, random_starts=args.random_starts,
                                           seed=args.seed, starts=args.reference_starts,
-                                          profile=args.motion)
+                                          profile=args.motion, region=region)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if dropped:
@@ -230,13 +237,14 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
           'ray; approach, from above: within 1e-3 rad; pose: orientation within 1e-6 rad) and '
           'motion time at most 0.1 % above the reference; time = wall time per plan.\n')
     if args.quiet or importlib.util.find_spec('tqdm') is None:
-        results = run_chain(methods, cases, arm, mode, fk, profile=args.motion)
+        results = run_chain(methods, cases, arm, mode, fk, profile=args.motion,
+                            tolerances=tolerances)
     else:
         from tqdm import tqdm
 
         with tqdm(total=len(cases), desc='bench', unit='goal', file=sys.stderr) as bar:
             results = run_chain(methods, cases, arm, mode, fk, step=bar.update,
-                                profile=args.motion)
+                                profile=args.motion, tolerances=tolerances)
     print(format_chain(results, cases))
     if args.baseline:
         print(format_sameness(results))
@@ -252,6 +260,9 @@ def _run(args: argparse.Namespace) -> int:
                          '(--urdf)')
     args.motion = motion_from_arguments(args)
     args.motion.time_law(arm, DEFAULT_OMEGA)    # a profile without the limits it needs: refused
+    if tolerances_from_arguments(args) and not args.urdf:
+        raise UsageError('tolerances are benchmarked on a URDF chain (--urdf): the exact '
+                         "minimum of the paper's arm is for its goal itself")
     methods, notes = _chosen_methods(args, arm)
     prepare()                      # compile or load the kernels now, not in the first timed plan
     if args.urdf:

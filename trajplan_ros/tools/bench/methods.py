@@ -21,7 +21,7 @@ import importlib.util
 import os
 from pathlib import Path
 import tempfile
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -61,15 +61,17 @@ class Answer:
     seconds: float | None = None
 
 
-#: ``solve(arm, mode, goal, start, seed, profile, orientation=None)``; ``orientation`` is a
-#: pose goal's quaternion (x, y, z, w).
+#: ``solve(arm, mode, goal, start, seed, profile, orientation=None, tolerances=None)``;
+#: ``orientation`` is a pose goal's quaternion (x, y, z, w), ``tolerances`` the plan's
+#: ``tolerance``, ``axis_tolerance`` and ``orientation_tolerance`` (those given; the peers,
+#: which reach the goal itself, take no tolerance).
 Solver = Callable[..., Answer]
 
 
 @dataclass(frozen=True)
 class Method:
     """
-    A row of the benchmark: ``solve(arm, mode, goal, start, seed, profile, orientation=None)``.
+    A row of the benchmark: ``solve(arm, mode, goal, start, seed, profile, ...)`` (``Solver``).
 
     ``requires`` names the optional package the method needs and ``imports`` the module it
     imports when it runs (``load`` imports it before the timed calls).
@@ -122,10 +124,11 @@ def load(methods: Sequence[Method]) -> None:
 
 def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None,
           arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-          profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
+          profile: MotionProfile, orientation: np.ndarray | None = None,
+          tolerances: Mapping[str, float] | None = None) -> Answer:
     result = plan(goal, start, arm=arm, mode=mode, algorithm=algorithm, seed=seed,
                   shaping=shaping, optimizer_options=options, motion=profile,
-                  orientation=orientation)
+                  orientation=orientation, **(tolerances or {}))
     if result.joint_goal is None:
         raise ValueError(f'{algorithm} rejected goal {goal.tolist()}: {result.message}')
     planned = planned_arm(arm, mode).planned                             # as the objective plans
@@ -133,7 +136,8 @@ def _core(algorithm: str, shaping: RewardPunishment | None, options: dict | None
 
 
 def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
+              profile: MotionProfile, orientation: np.ndarray | None = None,
+              tolerances: Mapping[str, float] | None = None) -> Answer:
     from scipy.optimize import differential_evolution
 
     obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
@@ -145,7 +149,8 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
 
 
 def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
-              profile: MotionProfile, orientation: np.ndarray | None = None) -> Answer:
+              profile: MotionProfile, orientation: np.ndarray | None = None,
+              tolerances: Mapping[str, float] | None = None) -> Answer:
     obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
     state = np.random.get_state()             # pyswarms draws from numpy's global generator
     np.random.seed(seed)
