@@ -147,6 +147,37 @@ def _moved(obj: Objective, target: Target, frame: np.ndarray) -> Objective:
                      orientation=quaternions(turned[None])[0] if pose else None)
 
 
+def _reached_target(obj: Objective, x: np.ndarray) -> Target:
+    """
+    Return the target that x reaches exactly: where its tool point is, its axis (or frame).
+
+    The plan of a search reaches the goal to rounding, but one that holds the axis in one
+    component (``Objective.in_plane``) leaves the other where the joints put it.
+    """
+    tool = obj.tool(x[None])[:, 0]
+    shift = tool[0] - obj.goal
+    if not obj.holds_axis:
+        return Target(shift, np.zeros(3))
+    if obj.mode is Mode.POSE:
+        turned = np.stack((tool[1], tool[2], np.cross(tool[1], tool[2])), axis=1) @ obj.ray_basis
+    else:
+        turned = _rotation_between(obj.axis_target, tool[1])
+    q = quaternions(turned[None])[0]
+    along = np.linalg.norm(q[:3])
+    angle = 2.0 * np.arctan2(along, q[3])
+    return Target(shift, q[:3] * (angle / along) if along > 0.0 else np.zeros(3))
+
+
+def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return the least rotation (3, 3) that turns unit vector a onto unit vector b."""
+    axis = np.cross(a, b)
+    along = np.linalg.norm(axis)
+    if not along > 0.0:
+        return np.eye(3)
+    angle = np.arctan2(along, a @ b)
+    return rotation_matrix(rotation_vector(axis * (angle / along)))
+
+
 def _step(radius: float, gradient: np.ndarray) -> np.ndarray:
     """Return the point of the ball of ``radius`` least along ``gradient``, a little inside."""
     size = np.linalg.norm(gradient)
@@ -174,8 +205,9 @@ def within_tolerances(obj: Objective, x: np.ndarray, region: Region) -> np.ndarr
     angle = region.angle if obj.holds_axis and region.angle > EXACT else 0.0
     if position == angle == 0.0:
         return x
-    best = _Plan(x, float(obj.motion_time(x[None])[0]), Target(np.zeros(3), np.zeros(3)))
-    here, at, frame = obj, x, _goal_frame(obj)
+    frame = _goal_frame(obj)
+    best = _Plan(x, float(obj.motion_time(x[None])[0]), _reached_target(obj, x))
+    here, at = _moved(obj, best.target, frame), x
     for _ in range(STEPS):
         lam = multipliers(here, at)
         if lam is None:

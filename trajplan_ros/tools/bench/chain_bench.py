@@ -166,7 +166,8 @@ def region_minimax(obj: Objective, x0: np.ndarray, region: Region) -> np.ndarray
     count = 3 + len(obj.across_basis)
     held = np.flatnonzero(np.r_[np.full(3, region.position == 0.0),
                                 np.full(count - 3, region.angle == 0.0)])
-    reach, (rows, _, _) = _reach(obj), _moving_rows(obj, held)
+    reach = _reach(obj)
+    rows = _moving_rows(obj, held)[0] if held.size else np.empty((0, 0))
 
     def tool(z: np.ndarray) -> np.ndarray:
         return obj.tool(z[None, :m])
