@@ -115,19 +115,24 @@ def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
                                    acceleration_scaling=args.acceleration_scaling)
 
 
-def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the goal's tolerances: the region the plan reaches fastest (``PlanRequest``)."""
+def add_tolerance_arguments(parser: argparse.ArgumentParser, several: bool = False) -> None:
+    """
+    Add the goal's tolerances: the region the plan reaches fastest (``PlanRequest``).
+
+    ``several``: each flag takes one or more values (a benchmark of each).
+    """
     group = parser.add_argument_group(
         "the goal's tolerances (the plan is the fastest motion into the region they make)")
-    group.add_argument('--tolerance', type=finite_number, metavar='M',
+    many = {'nargs': '+'} if several else {}
+    group.add_argument('--tolerance', type=finite_number, metavar='M', **many,
                        help='largest distance of the tool point from the goal '
                             f'(default {DEFAULT_TOLERANCE:g})')
-    group.add_argument('--axis-tolerance', type=finite_number, metavar='RAD',
+    group.add_argument('--axis-tolerance', type=finite_number, metavar='RAD', **many,
                        help='largest angle between the tool axis and the goal ray (radial) or '
                             'the approach direction (default '
                             + ', '.join(f'{k} {v:g}' for k, v in DEFAULT_AXIS_TOLERANCE.items())
                             + ')')
-    group.add_argument('--orientation-tolerance', type=finite_number, metavar='RAD',
+    group.add_argument('--orientation-tolerance', type=finite_number, metavar='RAD', **many,
                        help='largest angle of the rotation between the goal orientation and '
                             f"the tool's (default {DEFAULT_ORIENTATION_TOLERANCE:g})")
 

@@ -25,7 +25,7 @@ also counts answers that beat the reference by more than 0.1 % (where the refere
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import time
 from typing import Callable, Mapping, Sequence
 import warnings
@@ -45,7 +45,7 @@ from trajplan_ros.tools.bench.report import format_table
 from trajplan_ros.tools.bench.runner import SUCCESS_AXIS_ERROR, SUCCESS_ERROR, SUCCESS_GAP
 
 __all__ = ['ChainCase', 'ChainResults', 'IndependentFk', 'draw_chain_cases', 'format_chain',
-           'ikpy_method', 'local_minimax', 'minimax_reference', 'region_minimax',
+           'ikpy_method', 'local_minimax', 'minimax_reference', 'region_cases', 'region_minimax',
            'region_reference', 'run_chain', 'tolerance_region']
 
 
@@ -307,16 +307,12 @@ def _moving_rows(obj: Objective, held: np.ndarray | None = None
 
 def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, seed: int,
                      starts: int = 24, progress: Callable[[], object] | None = None,
-                     profile: MotionProfile | None = None,
-                     region: Region | None = None) -> tuple[list[ChainCase], int]:
+                     profile: MotionProfile | None = None) -> tuple[list[ChainCase], int]:
     """
     Draw ``n`` goals and their references (module docstring); also return how many were dropped.
 
     A goal is dropped when the reference finds no pose for it (radial mode: no radial pose;
-    approach mode, from above: none, or the goal is below the base, z < 0). With a ``region``
-    (the goal's tolerances) the reference is then the least time inside it
-    (``region_reference``, from the exact one's joint goal and ``starts`` more points, drawn
-    from the plan's seed: the same goals whatever the region).
+    approach mode, from above: none, or the goal is below the base, z < 0).
     """
     rng = np.random.default_rng(seed)
     low, high = _box(arm)
@@ -349,14 +345,29 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
         if best is None:
             dropped += 1
             continue
-        if region is not None:
-            best_time, best = region_reference(obj, region, np.random.default_rng(plan_seed),
-                                               starts, best)
         cases.append(ChainCase(goal, start, plan_seed, best_time, obj.full(best)[0],
                                orientation))
         if progress is not None:
             progress()
     return cases, dropped
+
+
+def region_cases(cases: Sequence[ChainCase], arm: ArmModel, mode: Mode, region: Region,
+                 starts: int, profile: MotionProfile | None = None) -> list[ChainCase]:
+    """
+    Return the cases with references inside ``region`` (the goals' tolerances).
+
+    Each is ``region_reference`` from the exact reference's joint goal and ``starts`` more
+    points, drawn from the case's plan seed.
+    """
+    out = []
+    for case in cases:
+        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
+                        orientation=case.orientation)
+        time, best = region_reference(obj, region, np.random.default_rng(case.seed), starts,
+                                      case.reference_q[: obj.arm.planned])
+        out.append(replace(case, reference_time=time, reference_q=obj.full(best)[0]))
+    return out
 
 
 class IndependentFk:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 import importlib.util
+import itertools
 import sys
 from typing import Sequence
 
@@ -33,12 +34,13 @@ from trajplan_ros.planning.planner import prepare
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
                                           add_tolerance_arguments, arm_from_arguments,
-                                          motion_from_arguments, positive_count,
-                                          tolerances_from_arguments, UsageError)
+                                          motion_from_arguments, positive_count, TOLERANCES,
+                                          UsageError)
 from trajplan_ros.tools.bench.baseline import baseline_method
 from trajplan_ros.tools.bench.cases import Case, draw_cases, DRAWS, paper_case
-from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, format_chain, ikpy_method,
-                                                  IndependentFk, run_chain, tolerance_region)
+from trajplan_ros.tools.bench.chain_bench import (ChainCase, ChainResults, draw_chain_cases,
+                                                  format_chain, ikpy_method, IndependentFk,
+                                                  region_cases, run_chain, tolerance_region)
 from trajplan_ros.tools.bench.methods import load, Method, METHODS
 from trajplan_ros.tools.bench.report import (format_criteria, format_failures,
                                              format_goals_heading, format_paper,
@@ -110,7 +112,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help='with --urdf: SLSQP starts of the reference per goal (default 24)')
     add_arm_arguments(p)
     add_motion_arguments(p)
-    add_tolerance_arguments(p)
+    add_tolerance_arguments(p, several=True)
     p.set_defaults(run=_run)
 
 
@@ -218,15 +220,10 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
           f'{args.seed}; reference: best of {args.reference_starts} SLSQP starts per goal.'
           + _motion_note(args))
     fk = IndependentFk(args.urdf, arm)
-    tolerances = tolerances_from_arguments(args)
-    region = tolerance_region(tolerances, mode) if tolerances else None
-    if region is not None:
-        print(f'tolerances {tolerances}: the reference is the least time inside their region '
-              '(SLSQP from the exact reference, the start and as many random points).')
     try:
         cases, dropped = draw_chain_cases(arm, n, mode=mode, random_starts=args.random_starts,
                                           seed=args.seed, starts=args.reference_starts,
-                                          profile=args.motion, region=region)
+                                          profile=args.motion)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if dropped:
@@ -234,8 +231,35 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
               f"{'' if mode is Mode.FREE else mode.value + ' '}pose for them"
               f"{' (or they lie below the base)' if mode is Mode.APPROACH else ''}.")
     print("success = error <= 1 um by yourdfpy's FK (radial: axis within 1e-6 rad of the goal "
-          'ray; approach, from above: within 1e-3 rad; pose: orientation within 1e-6 rad) and '
-          'motion time at most 0.1 % above the reference; time = wall time per plan.\n')
+          'ray; approach, from above: within 1e-3 rad; pose: orientation within 1e-6 rad), or '
+          'within the tolerances given, and motion time at most 0.1 % above the reference; '
+          'time = wall time per plan.')
+    for tolerances in _tolerance_sets(args):
+        results = _chain_results(args, arm, mode, methods, fk, cases, tolerances)
+        if args.baseline:
+            print(format_sameness(results))
+    for note in notes:
+        print(note)
+    return 0
+
+
+def _tolerance_sets(args: argparse.Namespace) -> list[dict[str, float]]:
+    """Return each combination of the tolerances given (one empty set: none given)."""
+    given = [name for name in TOLERANCES if getattr(args, name)]
+    return [dict(zip(given, values))
+            for values in itertools.product(*(getattr(args, name) for name in given))]
+
+
+def _chain_results(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: list[Method],
+                   fk: IndependentFk, cases: list[ChainCase],
+                   tolerances: dict[str, float]) -> dict[str, ChainResults]:
+    """Run and print the chain's table for one set of tolerances (the reference inside them)."""
+    if tolerances:
+        region = tolerance_region(tolerances, mode)
+        cases = region_cases(cases, arm, mode, region, args.reference_starts, args.motion)
+        print(f'\ntolerances {tolerances}: the reference is the least time inside them '
+              '(SLSQP from the exact reference, the start and as many random points).')
+    print()
     if args.quiet or importlib.util.find_spec('tqdm') is None:
         results = run_chain(methods, cases, arm, mode, fk, profile=args.motion,
                             tolerances=tolerances)
@@ -246,11 +270,7 @@ def _run_chain(args: argparse.Namespace, arm: ArmModel, mode: Mode, methods: lis
             results = run_chain(methods, cases, arm, mode, fk, step=bar.update,
                                 profile=args.motion, tolerances=tolerances)
     print(format_chain(results, cases))
-    if args.baseline:
-        print(format_sameness(results))
-    for note in notes:
-        print(note)
-    return 0
+    return results
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -260,7 +280,7 @@ def _run(args: argparse.Namespace) -> int:
                          '(--urdf)')
     args.motion = motion_from_arguments(args)
     args.motion.time_law(arm, DEFAULT_OMEGA)    # a profile without the limits it needs: refused
-    if tolerances_from_arguments(args) and not args.urdf:
+    if any(getattr(args, name) for name in TOLERANCES) and not args.urdf:
         raise UsageError('tolerances are benchmarked on a URDF chain (--urdf): the exact '
                          "minimum of the paper's arm is for its goal itself")
     methods, notes = _chosen_methods(args, arm)
