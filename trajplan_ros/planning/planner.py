@@ -11,6 +11,8 @@ Direct trajectory planning (Lv et al. 2019): search the final joint angles, then
     (<PlanStatus.SUCCEEDED: 'succeeded'>, 4.514)
 
 The keywords are the fields of ``PlanRequest`` (``plan(PlanRequest(goal, ...))`` is the same).
+Its tolerances make the goal a region: the search plans to the goal itself, then the plan moves
+to the fastest point, axis or orientation within them (``search.region``).
 A caller that must bound the search gives ``max_planning_time`` (s, on ``time.monotonic``)
 and/or ``stop`` (a callable, e.g. true after Ctrl-C). The optimiser asks both after every
 iteration (IEPSO also after every polish step); either ends the search with its best answer so

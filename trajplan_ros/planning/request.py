@@ -82,7 +82,9 @@ class PlanRequest:
         joint's velocity.
     :param world: the arm's collision model, scene and padding: the plan is the fastest direct
         motion found that keeps the padding. None: no collision check.
-    :param tolerance: largest position error (m) that counts as reached.
+    :param tolerance: largest position error (m). The tolerances make the goal a region: the
+        plan is the fastest motion found to any point, axis or orientation within them
+        (``search.region``); at 1e-6 or less they are the goal itself.
     :param axis_tolerance: radial and approach modes: largest angle (rad) of the tool axis to
         the goal ray or the approach direction; None: the mode's ``DEFAULT_AXIS_TOLERANCE``.
     :param orientation_tolerance: pose mode: largest angle (rad) of the rotation between the

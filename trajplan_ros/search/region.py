@@ -21,8 +21,20 @@ T* is nearly linear across a small region, so its least value there lies on the 
 against the gradient, on each ball alone (the region is their product): g' = g - r_p
 lambda_p / |lambda_p| and rho = -r_a grad / |grad|. Each step re-plans exactly to the new
 target from the last answer (``polish.polish``), up to ``STEPS`` times, until the target
-moves less than ``SETTLED`` of the radius; the fastest answer inside the region wins, and
-the exact plan stands when none is faster.
+moves less than ``SETTLED`` of the radius. A step that ends slower than the best so far has
+crossed a change of the joints that tie with R (a kink of T*): the next target lies halfway
+back. The walk starts at the target the plan reaches (``_reached_target``), and the fastest
+answer inside the region wins; the plan stands when none is faster. Radii of at most
+``EXACT`` are the goal itself (they could gain some 1e-6 of R), so the default tolerances
+leave plans as they are.
+
+An objective that holds one component of the axis (``Objective.in_plane``, a pan-and-pitch
+arm) leaves the other where the joints put it, so its axis can end further from the target
+than the target turned: secant steps then shrink the turn until the axis is inside.
+
+Being local, the walk finds the fastest point of the region near the plan to its centre: a
+faster one that needs another branch of the solutions (an SO-101 pick whose fastest axis in a
+0.01 rad cone turns the wrist roll the other way) is not found.
 """
 from __future__ import annotations
 
