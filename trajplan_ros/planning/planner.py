@@ -203,9 +203,8 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
                       law=r.motion.time_law(arm, r.angular_velocity))
     except InvalidRequest as exc:
         return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
-    searched, found = _search(obj, r, interrupt)
-    found = _fastest_within(obj, searched, found, r)
-    obj = searched
+    obj, found = _search(obj, r, interrupt)
+    found = _fastest_within(obj, found, r)
     result = _outcome(obj, found, r, clock, common)
     if obj.start_notes:
         result.message += f"; {'; '.join(obj.start_notes)}: the motion brings it inside"
@@ -239,22 +238,17 @@ def _search(obj: Objective, r: PlanRequest,
     return obj, search(obj)
 
 
-def _fastest_within(obj: Objective, searched: Objective, found: OptimizeResult,
-                    r: PlanRequest) -> OptimizeResult:
+def _fastest_within(obj: Objective, found: OptimizeResult, r: PlanRequest) -> OptimizeResult:
     """
     Return the search's answer moved to the fastest joint goal inside the goal's tolerances.
 
     Only an answer that reached the goal, and was not cut short, moves (``search.region``).
-    ``searched``: the objective the search ended on; where it holds one component of the axis
-    (``Objective.in_plane``), the region is searched holding both too, and the faster wins.
     """
     tool = obj.tool(found.x[None])
     if (found.interrupted is not None or np.linalg.norm(tool[0, 0] - obj.goal) > r.tolerance
             or obj.holds_axis and obj.angle_errors(tool)[0] > r.angle_limit):
         return found
-    region = Region(r.tolerance, r.angle_limit)
-    moved = [within_tolerances(o, found.x, region) for o in dict.fromkeys((obj, searched))]
-    x = min(moved, key=lambda x: obj.motion_time(x[None])[0])
+    x = within_tolerances(obj, found.x, Region(r.tolerance, r.angle_limit))
     if x is found.x:
         return found
     ev = obj(x[None])

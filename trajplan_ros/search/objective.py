@@ -35,6 +35,7 @@ R_goal (u0 x w0), which with u on its target vanishes at w = +-R_goal w0.
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from enum import Enum
 from typing import NamedTuple, Sequence
@@ -316,6 +317,29 @@ class Objective:
                                               orientation=self.orientation,
                                               start_margin=self.start_margin)
         return self._holding[across]
+
+    def aimed(self, goal: np.ndarray, target: np.ndarray) -> Objective:
+        """
+        Return this objective with its goal and its axis target (a pose: orientation) moved.
+
+        ``target``: the direction the tool axis points along (radial and approach modes: the
+        result is in approach mode, its target fixed wherever the goal), or a pose's unit
+        quaternion; ignored in free mode. Only what depends on them is built again
+        (``search.region`` moves them at every step).
+        """
+        out = copy.copy(self)
+        out.goal = np.array(goal, dtype=float)
+        if self.mode is Mode.POSE:
+            out.orientation = unit_quaternion(target)
+        elif self.holds_axis:
+            out.mode, out.approach = Mode.APPROACH, unit_direction(target)
+        out.ray_basis = out._target_basis()
+        out.across_basis = out._across_basis(self._across)
+        out._holding = {}
+        out.problem = self.problem._replace(goal=out.goal,
+                                            across=np.ascontiguousarray(out.across_basis),
+                                            ray=out.ray_basis)
+        return out
 
     def in_plane(self) -> Objective | None:
         """
