@@ -39,7 +39,7 @@ picks from above with cones of 0.001 to 0.05 rad.)
 Being local, the walk finds the fastest point of the region near the plan to its centre: a
 faster one that needs another branch of the solutions (an SO-101 pick whose fastest axis in a
 0.01 rad cone turns the wrist roll the other way; a Panda pose whose fastest orientation
-within 0.05 rad is 15 % faster on another elbow) is not found.
+within 0.05 rad is 15 % faster with joints 3 and 5 on their other side) is not found.
 """
 from __future__ import annotations
 
