@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
-from trajplan_ros.kinematics.rotations import quaternions
+from trajplan_ros.kinematics.rotations import (quaternion_of_turn, quaternions, rotation_matrix,
+                                               turn_of_quaternion)
 from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.search.polish import polish
 from trajplan_ros.search.region import multipliers, Region, target_gradient
@@ -122,3 +123,13 @@ def test_the_bench_takes_the_tolerances_by_their_names(capsys: pytest.CaptureFix
     assert tolerance_region({'axis_tolerance': 0.01}, Mode.FREE) == Region(0.0, 0.0)
     assert main(['bench', '--goals', '2', '--axis-tolerance', '0.01']) == 2
     assert 'tolerances are benchmarked on a URDF chain' in capsys.readouterr().err
+
+
+def test_a_turn_and_its_quaternion_are_one_rotation() -> None:
+    for turn in (np.zeros(3), np.array([1e-9, 0.0, 0.0]), np.array([0.3, -0.2, 0.05])):
+        q = quaternion_of_turn(turn)
+        assert turn_of_quaternion(q) == pytest.approx(turn, abs=1e-15)
+        assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-15)
+    axis = np.array([0.0, 0.0, 0.5])                  # half a radian about z
+    assert rotation_matrix(quaternion_of_turn(axis)) @ [1.0, 0.0, 0.0] == pytest.approx(
+        [np.cos(0.5), np.sin(0.5), 0.0], abs=1e-15)

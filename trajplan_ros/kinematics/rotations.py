@@ -7,8 +7,8 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ['QUATERNION_SLACK', 'quaternions', 'rotation_matrix', 'rotation_vector',
-           'unit_quaternion']
+__all__ = ['QUATERNION_SLACK', 'quaternion_of_turn', 'quaternions', 'rotation_matrix',
+           'turn_of_quaternion', 'unit_quaternion']
 
 #: How far from 1 a quaternion's norm may be (rounded decimals in a file or a message).
 QUATERNION_SLACK = 1e-3
@@ -44,12 +44,19 @@ def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-def rotation_vector(rotation: Sequence[float]) -> np.ndarray:
+def quaternion_of_turn(turn: Sequence[float]) -> np.ndarray:
     """Return the unit quaternion (x, y, z, w) of a rotation vector (its axis times its angle)."""
-    v = np.asarray(rotation, dtype=float)
+    v = np.asarray(turn, dtype=float)
     angle = float(np.linalg.norm(v))
     along = v * (0.5 if angle < 1e-8 else np.sin(0.5 * angle) / angle)
     return np.append(along, np.cos(0.5 * angle))
+
+
+def turn_of_quaternion(quaternion: Sequence[float]) -> np.ndarray:
+    """Return the rotation vector (axis times angle, rad) of a unit quaternion (x, y, z, w)."""
+    q = np.asarray(quaternion, dtype=float)
+    along = float(np.linalg.norm(q[:3]))
+    return q[:3] * (2.0 * np.arctan2(along, q[3]) / along) if along > 0.0 else np.zeros(3)
 
 
 def quaternions(rot: np.ndarray) -> np.ndarray:

@@ -47,7 +47,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix, rotation_vector
+from trajplan_ros.kinematics.rotations import (quaternion_of_turn, quaternions, rotation_matrix,
+                                               turn_of_quaternion)
 from trajplan_ros.search.objective import Mode, Objective
 from trajplan_ros.search.polish import polish
 
@@ -156,7 +157,7 @@ def target_gradient(obj: Objective, x: np.ndarray, lam: np.ndarray) -> Target:
 
 def _moved(obj: Objective, target: Target, frame: np.ndarray) -> Objective:
     """Return the objective of the goal moved to ``target``; ``frame``: the goal's (module)."""
-    turned = rotation_matrix(rotation_vector(target.turn)) @ frame
+    turned = rotation_matrix(quaternion_of_turn(target.turn)) @ frame
     aim = quaternions(turned[None])[0] if obj.mode is Mode.POSE else turned[:, 0]
     return obj.aimed(obj.goal + target.shift, aim)
 
@@ -178,10 +179,7 @@ def _reached_target(obj: Objective, x: np.ndarray) -> Target:
                                                         obj.axis_target @ tool[1])
         return Target(shift, axis * (angle / along) if along > 0.0 else np.zeros(3))
     turned = np.stack((tool[1], tool[2], np.cross(tool[1], tool[2])), axis=1) @ obj.ray_basis
-    q = quaternions(turned[None])[0]
-    along = np.linalg.norm(q[:3])
-    angle = 2.0 * np.arctan2(along, q[3])
-    return Target(shift, q[:3] * (angle / along) if along > 0.0 else np.zeros(3))
+    return Target(shift, turn_of_quaternion(quaternions(turned[None])[0]))
 
 
 def _step(radius: float, gradient: np.ndarray) -> np.ndarray:
