@@ -242,11 +242,13 @@ def _fastest_within(obj: Objective, found: OptimizeResult, r: PlanRequest) -> Op
     """
     Return the search's answer moved to the fastest joint goal inside the goal's tolerances.
 
-    Only an answer that reached the goal, and was not cut short, moves (``search.region``).
+    Only an answer that ``_status`` finds reached, not cut short, moves (``search.region``).
     """
     tool = obj.tool(found.x[None])
-    if (found.interrupted is not None or np.linalg.norm(tool[0, 0] - obj.goal) > r.tolerance
-            or obj.holds_axis and obj.angle_errors(tool)[0] > r.angle_limit):
+    angle = float(obj.angle_errors(tool)[0])          # NaN in free mode: not checked
+    status, _ = _status(found, r, float(np.linalg.norm(tool[0, 0] - obj.goal)), angle,
+                        obj.target_name)
+    if status is not PlanStatus.SUCCEEDED:
         return found
     x = within_tolerances(obj, found.x, Region(r.tolerance, r.angle_limit))
     if x is found.x:

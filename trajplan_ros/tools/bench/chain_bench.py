@@ -156,8 +156,8 @@ def region_minimax(obj: Objective, x0: np.ndarray, region: Region) -> np.ndarray
 
     Region radii of 0 hold that part exactly (the position residuals the joints can change,
     or the axis's or orientation's residuals). Inside: |p - g| <= r_p; the angle of the tool
-    axis to its target, or of the rotation to the goal orientation, at most r_a (by its
-    cosine: u . target, or (trace(R_goal^T R) - 1) / 2). Each inequality is scaled to a
+    axis to its target, or of the rotation to the goal orientation (``Objective.angle_errors``),
+    at most r_a, by its cosine. Each inequality is scaled to a
     gradient of order one on its boundary. None when SLSQP ends outside the region.
     """
     from scipy.optimize import minimize
@@ -179,7 +179,8 @@ def region_minimax(obj: Objective, x0: np.ndarray, region: Region) -> np.ndarray
             d = t[0, 0] - obj.goal
             out.append([(region.position ** 2 - d @ d) / region.position])
         if region.angle > 0.0:
-            out.append([(_cosine(obj, t) - np.cos(region.angle)) / np.sin(region.angle)])
+            out.append([(np.cos(obj.angle_errors(t)[0]) - np.cos(region.angle))
+                        / np.sin(region.angle)])
         return np.concatenate(out)
 
     def exact(z: np.ndarray) -> np.ndarray:
@@ -199,15 +200,6 @@ def region_minimax(obj: Objective, x0: np.ndarray, region: Region) -> np.ndarray
           and (not obj.holds_axis
                or obj.angle_errors(t)[0] <= max(region.angle, 1e-9) * (1 + 1e-9)))
     return x if ok else None
-
-
-def _cosine(obj: Objective, tool: np.ndarray) -> float:
-    """Return the cosine of the angle the mode holds at ``tool`` (V, 1, 3) (``region_minimax``)."""
-    if obj.mode is not Mode.POSE:
-        return float(tool[1, 0] @ obj.axis_target)
-    u, w = tool[1, 0], tool[2, 0]
-    a, b, c = obj.ray_basis
-    return float((a @ u + b @ w + c @ np.cross(u, w) - 1.0) / 2.0)
 
 
 def region_reference(obj: Objective, region: Region, rng: np.random.Generator,
