@@ -11,6 +11,8 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
+    # the order a first plan compiles its kernels in, for the helper process (parallel_compile)
+    package_data={'trajplan_ros.kinematics': ['kernel_order.json']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

@@ -17,11 +17,13 @@ from pathlib import Path
 import re
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
 from trajplan_ros import ArmModel, plan
 from trajplan_ros.kinematics import forward
+from trajplan_ros.kinematics import parallel_compile
 from trajplan_ros.kinematics.jit import CORE, core_stamp, FIRST_COMPILE, kernels
 from trajplan_ros.planning import prepare, RewardPunishment
 from trajplan_ros.tools.bench.cases import PAPER_TARGET
@@ -170,6 +172,66 @@ def test_prepare_compiles_what_every_arm_needs() -> None:
     assert {k: len(k.overloads) for k in kernels()} == before
 
 
+def test_a_first_plans_kernels_are_in_the_recorded_order() -> None:
+    # the helper process compiles from this list: a kernel whose types changed since it was
+    # recorded would be left to the first plan alone (record it anew: parallel_compile.record)
+    script = ('from trajplan_ros.kinematics.jit import kernels\n'
+              'from trajplan_ros.planning.planner import _WARM_UP_GOAL, prepare\n'
+              'from trajplan_ros.planning.request import PlanRequest\n'
+              'prepare(PlanRequest(_WARM_UP_GOAL))\n'
+              'for k in kernels():\n'
+              '    for args in k.overloads:\n'
+              '        print(k.py_func.__module__, k.py_func.__qualname__, args, sep="|")\n')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=300, cwd=Path(__file__).resolve().parents[1])
+    assert done.returncode == 0, done.stderr
+    loaded = {tuple(line.split('|')) for line in done.stdout.splitlines()}
+    assert len(loaded) >= 10
+    for run in parallel_compile.RUNS:
+        listed = {(module, name, str(args))
+                  for module, name, args in parallel_compile.recorded(run)}
+        assert loaded <= listed, loaded - listed
+
+
+def test_a_kernel_another_process_compiles_is_skipped_or_waited_for(monkeypatch) -> None:
+    prepare()
+    kernel = forward.walk_chain
+    args = next(iter(kernel.overloads))
+    monkeypatch.setattr(parallel_compile, '_active', [True])
+    path = parallel_compile._lock_path(kernel, args)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    holder = subprocess.Popen(
+        [sys.executable, '-c', 'import fcntl, sys\n'
+         f'lock = open({str(path)!r}, "a")\n'
+         'fcntl.flock(lock, fcntl.LOCK_EX)\n'
+         'print("held", flush=True)\n'
+         'sys.stdin.readline()\n'], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline() == 'held\n'
+        with parallel_compile.claim(kernel, args, wait=False) as mine:
+            assert not mine                                    # the helper goes on
+        waited: list[bool] = []
+
+        def wait_for_it() -> None:
+            with parallel_compile.claim(kernel, args) as mine:
+                waited.append(mine)
+
+        waiter = threading.Thread(target=wait_for_it)
+        waiter.start()
+        waiter.join(0.5)
+        assert waiter.is_alive() and not waited                # a plan waits for it
+        holder.stdin.write('\n')
+        holder.stdin.flush()
+        waiter.join(30)
+        assert waited == [True]
+    finally:
+        holder.kill()
+        holder.wait(30)
+    with parallel_compile.claim(kernel, args) as mine:         # and a callee's claim inside
+        with parallel_compile.claim(kernel, args) as again:    # its caller's does not block
+            assert mine and again
+
+
 def run_plan(env: dict[str, str]) -> subprocess.CompletedProcess:
     """Run ``trajplan plan`` on the paper's target in a new process with ``env``."""
     return subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.cli', 'plan', '0.151171',
@@ -186,6 +248,7 @@ def test_the_first_run_compiles_and_says_so_later_ones_load(empty_kernel_cache: 
     assert said[0].startswith('trajplan: compiling ') and 'for the first time' in said[0], said
     assert FIRST_COMPILE in said[0]
     assert said[1].startswith('trajplan: compiled ') and 'planning kernels in' in said[1], said
+    assert 'on two cores' in said[1], said                    # with the helper process
     again = run_plan(env)
     assert again.returncode == 0, again.stderr
     assert again.stderr == ''

@@ -23,6 +23,8 @@ of numba releases tested, and ``test_kernels`` checks the names used here.
 
 ``warm_up`` compiles or loads the kernels a run calls, so that no plan pays for it; it says when
 it begins to compile, and reports how long it took and whether anything had to be compiled.
+When it compiles, a helper process compiles the same kernels from the other end, on the other
+core (``parallel_compile``).
 """
 from __future__ import annotations
 
@@ -38,7 +40,9 @@ import time
 from typing import Any, Callable
 
 import numba
-from numba.core import caching, event, types
+from numba.core import caching, event, sigutils, types
+
+import trajplan_ros.kinematics.parallel_compile as parallel_compile
 
 __all__ = ['CORE', 'Warmup', 'core_stamp', 'inlined_kernel', 'kernel', 'kernels', 'warm_up']
 
@@ -47,8 +51,8 @@ _LOG = logging.getLogger('trajplan_ros')
 CORE = tuple(Path(__file__).resolve().parents[1] / name
              for name in ('kinematics', 'motion', 'collision', 'search', 'planning'))
 #: How long compiling takes (doc/benchmarks.md: the first start).
-FIRST_COMPILE = ('about 40 s for the paper arm without a scene, two minutes for every kernel, '
-                 'on two idle cores; longer on a busy machine')
+FIRST_COMPILE = ('about 25 s for the paper arm without a scene, 35 s for every kernel, on two '
+                 'idle cores (a helper process compiles beside); longer on a busy machine')
 #: Every kernel made by ``kernel``, with the call that compiles it (see ``warm_up``).
 _KERNELS: list[Any] = []
 _warned: list[bool] = []
@@ -194,8 +198,22 @@ def _compiled(func: Callable[..., Any], inline: str) -> Any:
                          'every process compiles them anew; set NUMBA_CACHE_DIR to a writable '
                          'folder to keep them')
     _compile_calls_unliteral(compiled)
+    _compile_claimed(compiled)
     _KERNELS.append(compiled)
     return compiled
+
+
+def _compile_claimed(compiled: Any) -> None:
+    """Compile ``compiled`` holding its claim, while a helper process compiles beside."""
+    original = compiled.compile
+
+    def compile_claimed(sig: Any) -> Any:
+        args = tuple(sigutils.normalize_signature(sig)[0])
+        if args in compiled.overloads:
+            return original(sig)
+        with parallel_compile.claim(compiled, args):
+            return original(sig)
+    compiled.compile = compile_claimed
 
 
 def _compile_calls_unliteral(compiled: Any) -> None:
@@ -221,14 +239,25 @@ def kernels() -> tuple[Any, ...]:
 
 @dataclass(frozen=True)
 class Warmup:
-    """What ``warm_up`` did: its time (s) and how many kernels it compiled or loaded."""
+    """
+    What ``warm_up`` did: its time (s) and how many kernels it compiled or loaded.
+
+    ``helped`` is whether a helper process compiled beside it; the kernels it loaded then are
+    mostly the helper's.
+    """
 
     seconds: float
     compiled: int
     loaded: int
+    helped: bool = False
 
     def describe(self) -> str:
         """Say it in one line, for a log."""
+        if self.compiled and self.helped:
+            return (f'compiled {self.compiled + self.loaded} planning kernels in '
+                    f'{self.seconds:.1f} s on two cores ({self.loaded} of them loaded from what '
+                    'a helper process compiled beside; once: later starts load them from the '
+                    'cache)')
         if self.compiled:
             return (f'compiled {self.compiled} planning kernels in {self.seconds:.1f} s (once: '
                     'later starts load them from the cache)')
@@ -236,33 +265,47 @@ class Warmup:
 
 
 def warm_up(run: Callable[[], object],
-            announce: Callable[[str], object] | None = None) -> Warmup:
+            announce: Callable[[str], object] | None = None,
+            recorded: str = 'first_plan') -> Warmup:
     """
     Call ``run`` (which calls kernels) and count what it compiled or loaded.
 
     A kernel's new machine code is either loaded (numba's cache hits) or compiled. When the
-    first compile begins, ``announce`` is told so, with how long compiling takes.
+    first compile begins, ``announce`` is told so, with how long compiling takes, and a helper
+    process begins to compile the ``recorded`` run's kernels from its end
+    (``parallel_compile``), until ``run`` returns.
     """
     def loaded() -> int:
         return sum(sum(k.stats.cache_hits.values()) for k in _KERNELS)
 
     overloads, hits = {k: len(k.overloads) for k in _KERNELS}, loaded()
+    helper = parallel_compile.Helper(recorded)
     began = time.perf_counter()
-    with event.install_listener('numba:compile', _FirstCompile(announce)):
-        run()
+    try:
+        with event.install_listener('numba:compile', _FirstCompile(announce, helper)):
+            run()
+    finally:
+        helped = helper.stop()
     seconds = time.perf_counter() - began
     new = sum(len(k.overloads) - overloads[k] for k in _KERNELS)
     from_cache = loaded() - hits
-    return Warmup(seconds, new - from_cache, from_cache)
+    return Warmup(seconds, new - from_cache, from_cache, helped)
 
 
 class _FirstCompile(event.Listener):
-    """Says once, when numba begins to compile (a kernel found on disk is loaded silently)."""
+    """
+    Say once when numba begins to compile, and start the helper process then.
 
-    def __init__(self, announce: Callable[[str], object] | None) -> None:
+    A kernel found on disk is loaded silently.
+    """
+
+    def __init__(self, announce: Callable[[str], object] | None,
+                 helper: parallel_compile.Helper) -> None:
         self._announce = announce
+        self._helper = helper
 
-    def on_start(self, _: event.Event) -> None:
+    def on_start(self, ev: event.Event) -> None:
+        self._helper.start(ev.data['dispatcher'])
         if self._announce is not None:
             self._announce(f'compiling planning kernels for the first time: {FIRST_COMPILE} '
                            '(later starts load them in about a second)')

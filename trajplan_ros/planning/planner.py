@@ -468,7 +468,8 @@ def prepare(*requests: PlanRequest,
                 plan(PlanRequest(_WARM_UP_GOAL, seed=0, motion=request.motion,
                                  world=_warm_up_world()))
 
-    return warm_up(these_plans if requests else every_plan, announce)
+    return warm_up(these_plans if requests else every_plan, announce,
+                   recorded='first_plan' if requests else 'every_plan')
 
 
 def _warm_up_world() -> CollisionWorld:
