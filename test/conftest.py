@@ -108,45 +108,54 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
     return Install(root / 'install' / PACKAGE)
 
 
-# --- control_msgs, for execution through FollowJointTrajectory --------------------------------
+# --- interfaces not on PyPI: control_msgs (execution), moveit_msgs (MoveIt's clients) -----------
 
-#: The interface sources and their build script (control_msgs is not on PyPI): the folder
+#: The interface sources and their build script (neither package is on PyPI): the folder
 #: ROS_INTERFACES_SRC names, else ``shared/ros_interfaces`` beside this clone.
 ROS_INTERFACES = Path(os.environ.get('ROS_INTERFACES_SRC')
                       or REPO.parent / 'shared' / 'ros_interfaces')
-#: The packages the tests need, and what they depend on (the folder holds more).
-INTERFACE_PACKAGES = ('control_msgs',)
+#: Each package a test needs, by the fixture that gives it, and how the node loads it.
+INTERFACES = {
+    'control_msgs_env': ('control_msgs',
+                         'from trajplan_ros.ros.execution import action_type; action_type()'),
+    'moveit_msgs_env': ('moveit_msgs', 'from trajplan_ros.ros.moveit_interfaces import '
+                                       'moveit_types; moveit_types()'),
+}
 #: Where they are built, once per venv (the script installs the rosidl generators into it).
 INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
-#: Written when the build succeeded (a build stopped halfway leaves its folder behind).
-BUILT = INTERFACES_BUILD / 'built'
-#: Loads FollowJointTrajectory as the node does, type support and all.
-_LOAD_ACTION = 'from trajplan_ros.ros.execution import action_type; action_type()'
 
 
-def _loads_action(env: dict[str, str]) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, '-c', _LOAD_ACTION], env=env, capture_output=True,
-                          text=True, timeout=120)
+def _built(package: str) -> Path:
+    """Return the file written when ``package``'s build succeeded (a stopped one leaves none)."""
+    return INTERFACES_BUILD / f'built-{package}'
+
+
+def _loads(fixture: str, env: dict[str, str]) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, '-c', INTERFACES[fixture][1]], env=env,
+                          capture_output=True, text=True, timeout=120)
 
 
 class _InterfacesBuild:
-    """The build of control_msgs, started in the background as soon as the run is collected."""
+    """The build of the packages the run needs, started in the background at collection."""
 
     proc: subprocess.Popen | None = None
     log: Path | None = None
+    packages: tuple[str, ...] = ()
 
     @classmethod
-    def start(cls) -> None:
-        """Start the build where it is needed and possible (the fixture says why otherwise)."""
+    def start(cls, fixtures: list[str]) -> None:
+        """Start the build where it is needed and possible (the fixtures say why otherwise)."""
         script = ROS_INTERFACES / 'build_ros_interfaces.sh'
-        if (BUILT.is_file() or not script.is_file()
-                or _loads_action(dict(os.environ)).returncode == 0):
+        cls.packages = tuple(INTERFACES[f][0] for f in fixtures
+                             if not _built(INTERFACES[f][0]).is_file()
+                             and _loads(f, dict(os.environ)).returncode != 0)
+        if not cls.packages or not script.is_file():
             return
         INTERFACES_BUILD.mkdir(parents=True, exist_ok=True)
         cls.log = INTERFACES_BUILD / 'build.log'
         with open(cls.log, 'w', encoding='utf-8') as log:
             cls.proc = subprocess.Popen(['bash', str(script), sys.prefix, str(ROS_INTERFACES),
-                                         str(INTERFACES_BUILD), *INTERFACE_PACKAGES],
+                                         str(INTERFACES_BUILD), *cls.packages],
                                         stdout=log, stderr=log,
                                         stdin=subprocess.DEVNULL, start_new_session=True)
 
@@ -155,10 +164,12 @@ class _InterfacesBuild:
         """Wait for a started build; fail with the end of its log if it failed."""
         if cls.proc is None:
             return
-        code = cls.proc.wait(timeout=1200)
+        code = cls.proc.wait(timeout=1800)
         log = cls.log.read_text(encoding='utf-8', errors='replace')
         assert code == 0, f'{ROS_INTERFACES}/build_ros_interfaces.sh failed:\n{log[-3000:]}'
-        BUILT.touch()
+        for package in cls.packages:
+            _built(package).touch()
+        cls.proc = None
 
     @classmethod
     def stop(cls) -> None:
@@ -169,26 +180,26 @@ class _InterfacesBuild:
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
-    """Start building control_msgs while the tests that do not need it run."""
-    if any('control_msgs_env' in getattr(item, 'fixturenames', ()) for item in session.items):
-        _InterfacesBuild.start()
+    """Start building the interfaces the run needs while the tests that do not run."""
+    used = {name for item in session.items for name in getattr(item, 'fixturenames', ())}
+    _InterfacesBuild.start([f for f in INTERFACES if f in used])
 
 
-@pytest.fixture(scope='session')
-def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
+def _interfaces_env(fixture: str, ros_env: dict[str, str]) -> dict[str, str]:
     """
-    Give an environment in which control_msgs loads; skip where it cannot be had.
+    Give an environment in which ``fixture``'s package loads; skip where it cannot be had.
 
-    An importable control_msgs is used as it is. Else it is built from ``ROS_INTERFACES`` with
-    its build_ros_interfaces.sh into ``INTERFACES_BUILD`` (about 1.5 min, once per venv, begun
-    when the run is collected); a clone without those sources skips with that reason.
+    An importable package is used as it is. Else it is built from ``ROS_INTERFACES`` with its
+    build_ros_interfaces.sh into ``INTERFACES_BUILD`` (once per venv, begun when the run is
+    collected); a clone without those sources skips with that reason.
     """
-    if _loads_action(ros_env).returncode == 0:
+    if _loads(fixture, ros_env).returncode == 0:
         return dict(ros_env)
+    package = INTERFACES[fixture][0]
     _InterfacesBuild.wait()
     install = INTERFACES_BUILD / 'install'
-    if not BUILT.is_file():
-        pytest.skip(f'control_msgs does not load and {ROS_INTERFACES} has no '
+    if not _built(package).is_file():
+        pytest.skip(f'{package} does not load and {ROS_INTERFACES} has no '
                     'build_ros_interfaces.sh to build it (set ROS_INTERFACES_SRC to the folder '
                     'of the interface sources)')
     python = f'python{sys.version_info.major}.{sys.version_info.minor}'
@@ -197,10 +208,22 @@ def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
     env = dict(ros_env)
     for name, found in paths.items():
         env[name] = os.pathsep.join(filter(None, [*found, ros_env.get(name)]))
-    loaded = _loads_action(env)
-    assert loaded.returncode == 0, f'control_msgs built in {install} does not load: ' \
+    loaded = _loads(fixture, env)
+    assert loaded.returncode == 0, f'{package} built in {install} does not load: ' \
         f'{loaded.stderr[-2000:]}'
     return env
+
+
+@pytest.fixture(scope='session')
+def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
+    """Give an environment in which control_msgs loads (about 1.5 min to build, once)."""
+    return _interfaces_env('control_msgs_env', ros_env)
+
+
+@pytest.fixture(scope='session')
+def moveit_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
+    """Give an environment in which moveit_msgs loads (about 5 min to build, once)."""
+    return _interfaces_env('moveit_msgs_env', ros_env)
 
 
 # --- the node process ---------------------------------------------------------------------------

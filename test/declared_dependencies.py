@@ -40,7 +40,7 @@ ROS_DISTRIBUTIONS = {'coal': 'coal'}
 KEY_DISTRIBUTIONS = {key: dist for dist, key in DISTRIBUTION_KEYS.items()}
 #: ROS packages with no wheel on PyPI: the pip route builds them from their interface files, so
 #: the venv's ament index lacks them; rosdep installs them from Jazzy's release.
-NOT_ON_PYPI = ('control_msgs',)
+NOT_ON_PYPI = ('control_msgs', 'moveit_msgs')
 
 #: package.xml's tags of what the package needs at run time (REP 140).
 RUN_TAGS = ('depend', 'exec_depend')

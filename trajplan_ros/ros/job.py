@@ -54,11 +54,17 @@ class Outcome:
     clearance: tuple[float, str] | None = None   # least clearance (m) and where (collisions)
     via_points: int | None = None            # via points of a published trajectory
     start: np.ndarray | None = None          # the joint angles it was planned from
+    result: PlanResult | None = None         # the planning core's result, if it planned
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
     optimised = f'; {took}' if result.joint_goal is not None else ''
     return f'{where}: {result.status.value}: {result.message}{optimised}'
+
+
+def goal_orientation(job: Job, settings: Settings) -> str:
+    """Return how the job's orientation is used: its own choice, else the parameter's."""
+    return job.goal_orientation or settings.goal_orientation
 
 
 def in_base(job: Job, settings: Settings,
@@ -71,7 +77,7 @@ def in_base(job: Job, settings: Settings,
     """
     s = settings
     rotation = None
-    if s.goal_orientation != 'ignore' and job.orientation is not None:
+    if goal_orientation(job, s) != 'ignore' and job.orientation is not None:
         q = np.asarray(job.orientation, dtype=float)      # a rotation: goal_problem checked
         rotation = rotation_matrix(q / np.linalg.norm(q))
     if job.frame in ('', s.base_frame):
@@ -87,7 +93,7 @@ def _pointed(request: PlanRequest, rotation: np.ndarray | None,
     if rotation is None:
         return request
     if goal_orientation == 'approach':
-        return request.replace(approach=rotation[:, 2])
+        return request.replace(mode=Mode.APPROACH, approach=rotation[:, 2])
     return request.replace(mode=Mode.POSE, orientation=quaternions(rotation[None])[0])
 
 
@@ -106,29 +112,31 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     where = (f'{job.label} {describe_goal(job.goal)} m{moved} from q = '
              f'{describe_goal(start.q)} rad{start.describe()}')
     request = s.request.replace(goal=job.goal, start=start.q,
-                                tolerance=job.tolerance or s.request.tolerance)
-    result = plan(_pointed(request, rotation, s.goal_orientation), stop=stop)
+                                tolerance=job.tolerance or s.request.tolerance,
+                                **job.request_changes)
+    result = plan(_pointed(request, rotation, goal_orientation(job, s)), stop=stop)
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None
     if not result.success:
         return Outcome(False, _refusal(where, result, took), result.status.value,
                        result.message, plan_time_s=timed,
-                       timed_out=result.status is PlanStatus.TIMED_OUT, clearance=clearance)
+                       timed_out=result.status is PlanStatus.TIMED_OUT, clearance=clearance,
+                       start=start.q, result=result)
     points = result.trajectory_points(sample_period=s.sample_period)
     if points > s.max_trajectory_points:
         reason = (f'the trajectory would need {points} points, more than '
                   f'max_trajectory_points {s.max_trajectory_points} (motion '
                   f'{result.motion_time_s:.3f} s at sample_period {s.sample_period:g} s)')
         return Outcome(False, f'{where}: refused: {reason}; {took}', 'refused', reason,
-                       plan_time_s=timed)
+                       plan_time_s=timed, start=start.q, result=result)
     traj = result.trajectory(sample_period=s.sample_period)
-    path = path_msg(s.arm, traj, header) if job.is_call else None
-    sent = ('answered, not sent (compute_plan)' if job.plan_only else
+    path = path_msg(s.arm, traj, header) if job.is_call and job.answer_path else None
+    sent = ('answered, not sent (plan only)' if job.plan_only else
             {'topic': 'published', 'action': 'sending', 'none': 'not sent (execution none):'}[
                 s.execution])
     return Outcome(True, f'{where}: {result.message}; {took}; {sent} {len(traj.times)} '
                          f'points over {traj.duration:.3f} s', result.status.value,
                    result.message, path=path, trajectory=traj, settings=s,
                    plan_time_s=timed, motion_time_s=result.motion_time_s, clearance=clearance,
-                   via_points=len(result.via_points), start=start.q)
+                   via_points=len(result.via_points), start=start.q, result=result)

@@ -37,6 +37,12 @@ class PlanStart:
         self.q = np.asarray(angles, dtype=float)
         self.sources = dict(zip(names, sources))
 
+    def given(self, angles: Mapping[str, float], source: str) -> PlanStart:
+        """Return this start with the joints ``angles`` names (others ignored) from ``source``."""
+        names = list(self.sources)
+        return PlanStart(names, [float(angles.get(n, q)) for n, q in zip(names, self.q)],
+                         [source if n in angles else self.sources[n] for n in names])
+
     def describe(self) -> str:
         """Say where the joints came from, when there was more than one source, else ''."""
         by_source: dict[str, list[str]] = collections.defaultdict(list)

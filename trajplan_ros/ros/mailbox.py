@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import enum
 import threading
 import time
-from typing import Any
+from typing import Any, Mapping
 
 
 __all__ = ['Admission', 'Job', 'Mailbox']
@@ -42,6 +42,13 @@ class Job:
     frame: str = ''                          # the goal's frame_id ('': the base frame)
     orientation: tuple[float, float, float, float] | None = None   # a pose goal's (x, y, z, w)
     plan_only: bool = False                  # answered, never sent to the controller
+    #: how the orientation is used, instead of the goal_orientation parameter (None: as it says)
+    goal_orientation: str | None = None
+    #: changes to the settings' PlanRequest for this job alone (a MoveIt request's own
+    #: tolerances, time budget and scaling)
+    request_changes: Mapping[str, Any] = field(default_factory=dict)
+    start_state: Mapping[str, float] = field(default_factory=dict)   # joint angles it gives
+    answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan

@@ -15,6 +15,9 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   for ``goal_pose``). The response's plan is the tool path of the trajectory, one pose per
   point (empty on failure).
 * ``compute_plan`` (nav_msgs/srv/GetPlan): answered as ``plan_trajectory``, never published.
+* ``plan_kinematic_path`` (moveit_msgs/srv/GetMotionPlan; with ``moveit_interfaces``):
+  move_group's planning service for MoveIt's clients, answered with the joint trajectory and
+  MoveIt's error code (``ros.moveit_interfaces``); never published.
 * Frames: a stamped goal (``goal_pose``, ``clicked_point``, the services) in any link frame
   of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
   its current joint angles (``kinematics.frames``); any other frame is refused, naming the
@@ -101,7 +104,7 @@ from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.planning import Mode, prepare
 from trajplan_ros.planning.planner import describe_goal
-from trajplan_ros.ros import job as jobs, outcomes
+from trajplan_ros.ros import job as jobs, moveit_interfaces as moveit, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.execution import action_type, ActionExecution, Motion, resolve_action
 from trajplan_ros.ros.joint_states import JointStateMonitor
@@ -200,7 +203,8 @@ class PlannerNode(Node):
         self._stopping = threading.Event()
         self._answer_lock = threading.Lock()
         self._publish_lock = threading.Lock()
-        self._finished: collections.deque[tuple[Job, Path | None]] = collections.deque()
+        self._finished: collections.deque[tuple[Job, jobs.Outcome | None]] = (
+            collections.deque())
         self._current: Job | None = None                        # the job being planned
         self._prepared: set[tuple] = set()          # the kinds of plan whose kernels are ready
         self._flushed = threading.Event()
@@ -230,6 +234,9 @@ class PlannerNode(Node):
                             callback_group=calls)
         self.create_service(GetPlan, 'compute_plan', self._on_compute_plan,
                             qos_profile=KEEP_ALL, callback_group=calls)
+        self._moveit_ignored: set[str] = set()      # MoveIt request fields said to be ignored
+        if self.get_parameter('moveit_interfaces').value:
+            self._offer_moveit(calls)
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
@@ -250,6 +257,9 @@ class PlannerNode(Node):
             resolve_action(self, values['controller_action'])
             if values['execution'] == 'action' and self._execution is None:
                 action_type()
+            if values['moveit_interfaces'] != self.get_parameter('moveit_interfaces').value:
+                raise ValueError('moveit_interfaces is read at start-up: start the node with '
+                                 '--ros-args -p moveit_interfaces:=true')
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             return SetParametersResult(successful=False, reason=_reason(exc))
         return SetParametersResult(successful=True)
@@ -418,7 +428,6 @@ class PlannerNode(Node):
     async def _serve(self, request: GetPlan.Request, response: GetPlan.Response,
                      plan_only: bool) -> GetPlan.Response:
         """Answer a call of plan_trajectory, or of compute_plan (``plan_only``: never sent)."""
-        self._counters.add('calls_received')
         s = self._settings
         p = request.goal.pose.position
         stamp = request.goal.header.stamp
@@ -427,22 +436,64 @@ class PlannerNode(Node):
                   stamp=(stamp.sec, stamp.nanosec), frame=request.goal.header.frame_id,
                   orientation=_quaternion(request.goal.pose), plan_only=plan_only)
         response.plan = Path(header=self._header(s.base_frame))
-        problem = request_problem(request, s)
+        outcome = await self.queue_call(job, request_problem(request, s))
+        if outcome is not None and outcome.path is not None:
+            response.plan = outcome.path
+        return response
+
+    def _offer_moveit(self, calls: ReentrantCallbackGroup) -> None:
+        """Serve move_group's interfaces (ValueError: moveit_msgs does not load)."""
+        self._moveit_msg, moveit_srv = moveit.moveit_types()
+        self.create_service(moveit_srv.GetMotionPlan, 'plan_kinematic_path',
+                            self._on_motion_plan, qos_profile=KEEP_ALL, callback_group=calls)
+        self.get_logger().info("MoveIt's interfaces ready: plan_kinematic_path")
+
+    async def _on_motion_plan(self, request: Any, response: Any) -> Any:
+        """Answer move_group's plan_kinematic_path (``ros.moveit_interfaces``)."""
+        s = self._settings
+        label = f'plan_kinematic_path call #{next(self._call_ids)}'
+        asked = request.motion_plan_request
+        semantic = self.get_parameter('robot_description_semantic').value or self._topic_semantic
+        try:
+            job = moveit.goal_job(label, asked, s, semantic, Future(), self._say_ignored)
+            problem = None
+        except moveit.Refusal as exc:
+            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
+        outcome = await self.queue_call(job, problem and str(problem))
+        code = ((problem.code, str(problem)) if problem else
+                moveit.error_code(outcome, job))
+        moveit.fill_response(response.motion_plan_response, outcome, code, s, asked.group_name,
+                             self._header(s.base_frame), self._moveit_msg.MoveItErrorCodes)
+        return response
+
+    def _say_ignored(self, field: str) -> None:
+        if field not in self._moveit_ignored:
+            self._moveit_ignored.add(field)
+            self.get_logger().info(f'plan_kinematic_path: {field} is ignored (one planner: '
+                                   'this one); said once')
+
+    async def queue_call(self, job: Job, problem: str | None = None) -> jobs.Outcome | None:
+        """
+        Plan a service call's ``job`` in turn and return its outcome (None: not planned).
+
+        ``problem``: why the call is refused before it is queued.
+        """
+        self._counters.add('calls_received')
+        s = self._settings
         admission = None if problem else self._mailbox.put_call(job, s.max_queued_calls)
+        outcome = None
         if problem:
             self._refused(job, problem)
         elif admission is Admission.QUEUED:
-            path = await job.future
+            outcome = await job.future
             job.taken.set()
-            if path is not None:
-                response.plan = path
         elif admission is Admission.FULL:
             self._refused(job, f'{s.max_queued_calls} calls are waiting already '
                                '(max_queued_calls)')
         else:
             self._give_up(job)
         self._counters.add('calls_answered')
-        return response
+        return outcome
 
     def _refused(self, job: Job, reason: str) -> None:
         self._log.warning(f'{job.label} {describe_goal(job.goal)} m: refused: {reason}')
@@ -522,7 +573,7 @@ class PlannerNode(Node):
     def _handle(self, job: Job) -> None:
         outcome = self._plan(job)
         if job.is_call:
-            self._answer(job, None if self._stopping.is_set() else outcome.path)
+            self._answer(job, None if self._stopping.is_set() else outcome)
             # the answer goes out first: publishing now would compete with its sending for
             # the interpreter lock, so give it a moment unless more work is waiting
             job.taken.wait(SHUTDOWN_STEP_S)
@@ -539,6 +590,8 @@ class PlannerNode(Node):
                        or self._stopping.is_set() or time.monotonic() > deadline):
                 pass
         start = self._states.start(s.arm.joint_names, s.start)
+        if job.start_state:
+            start = start.given(job.start_state, 'the request')
         self._log.debug(f'planning {job.label} {describe_goal(job.goal)} m')
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
         if outcome.plan_time_s is not None:
@@ -618,19 +671,20 @@ class PlannerNode(Node):
                 self.get_logger().info(f'{job.label} {describe_goal(job.goal)} m: {reason}')
         self._publish_outcome(job, status, reason or 'shutting down')   # unless told already
 
-    def _answer(self, job: Job, path: Path | None) -> None:
+    def _answer(self, job: Job, outcome: jobs.Outcome | None) -> None:
         """Hand a call its answer (once), for the executor thread to complete its Future."""
         with self._answer_lock:
             if job.answered:
                 return
-            job.answered, job.planned_answer = True, path is not None
-            self._finished.append((job, path))
+            job.answered = True
+            job.planned_answer = outcome is not None and outcome.succeeded
+            self._finished.append((job, outcome))
         self._deliver.trigger()
 
     def _deliver_answers(self) -> None:
         while self._finished:
-            job, path = self._finished.popleft()
-            job.future.set_result(path)
+            job, outcome = self._finished.popleft()
+            job.future.set_result(outcome)
 
     def _publish_diagnostics(self) -> None:
         waiting, oldest = self._mailbox.waiting()

@@ -206,6 +206,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('max_queued_calls', 1000,
                   'most service calls that may wait for a plan; more are answered at once with '
                   'an empty plan', bounds=(1, 100000)),
+    ParameterSpec('moveit_interfaces', False,
+                  "serve move_group's plan_kinematic_path (moveit_msgs/srv/GetMotionPlan) for "
+                  'MoveIt clients; needs moveit_msgs (read at start-up)'),
 )
 
 

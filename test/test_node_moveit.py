@@ -1,0 +1,171 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+move_group's plan_kinematic_path, over real DDS, as a MoveIt client asks it.
+
+The node runs with ``moveit_interfaces`` and the moveit_msgs the session fixture provides; the
+client is ``moveit_client.py`` in a process of its own with the same environment (the request
+as pymoveit2's template builds it). The answers are checked on the arm: the trajectory's last
+point through forward kinematics, not only the code. Without moveit_msgs (and no sources to
+build it) these tests skip with the reason, except the refusal at start, which needs its
+absence.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+import subprocess
+import sys
+from typing import Any, Callable, Iterator
+
+from node_under_test import ARM, NodeProcess
+import numpy as np
+import pytest
+from trajplan_ros.kinematics.rotations import quaternions
+
+pytestmark = pytest.mark.dds
+
+NS = '/moveit'
+SERVICE = f'{NS}/plan_kinematic_path'                 # as move_group's: not private
+CLIENT = Path(__file__).with_name('moveit_client.py')
+REACHABLE = (0.151171, 0.19162, 0.172124)
+OUT_OF_REACH = (0.05, -0.05, -0.25)
+
+
+@pytest.fixture(scope='module')
+def move_group(start_node: Callable[..., NodeProcess],
+               moveit_msgs_env: dict[str, str]) -> Iterator[tuple[NodeProcess, dict]]:
+    """Run the node as move_group with MoveIt's interfaces on (the paper's arm)."""
+    node = start_node('-r', f'__ns:={NS}', '-r', '__node:=move_group', '-p',
+                      'moveit_interfaces:=true', '-p', 'angular_velocity:=1.0',
+                      ready=False, env=moveit_msgs_env)
+    node.wait_for(r"move_group\]: MoveIt's interfaces ready: plan_kinematic_path")
+    node.wait_for(r'move_group\]: ready: ')
+    yield node, moveit_msgs_env
+    assert node.stop() == 0, node.output
+
+
+def ask(move_group: tuple[NodeProcess, dict], *specs: dict[str, Any]) -> list[dict[str, Any]]:
+    """Send each request (``moveit_client.motion_request``'s keywords); return the answers."""
+    _, env = move_group
+    done = subprocess.run([sys.executable, str(CLIENT), SERVICE, json.dumps(specs)], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return [json.loads(line) for line in done.stdout.splitlines()]
+
+
+def tool_at(positions: list[float]) -> np.ndarray:
+    return ARM.tool(np.array([positions]))[0][0]
+
+
+def test_a_position_goal_is_planned_into_its_sphere_from_the_given_start(move_group) -> None:
+    start = {'joint1': 0.2, 'joint2': -0.1, 'finger': 0.01}          # extras ignored
+    answer, = ask(move_group, {'position': REACHABLE, 'radius': 0.001, 'start': start})
+    assert answer['code'] == 'SUCCESS', answer
+    assert answer['source'] == 'trajplan_ros' and answer['message'].startswith('reached')
+    assert answer['joint_names'] == list(ARM.joint_names) == answer['start_names']
+    assert answer['times'][0] == 0.0 and answer['planning_time'] > 0.0
+    first, last = answer['positions'][0], answer['positions'][-1]
+    assert first == answer['start'] and first[:2] == [0.2, -0.1]
+    assert np.linalg.norm(tool_at(last) - REACHABLE) <= 0.001 + 1e-9
+    assert answer['frame'] == 'base_link'                     # the base_frame parameter
+
+
+def test_a_larger_sphere_is_a_region_the_plan_moves_into_faster(move_group) -> None:
+    small, large = ask(move_group, {'position': REACHABLE, 'radius': 0.001},
+                       {'position': REACHABLE, 'radius': 0.03})
+    assert small['code'] == large['code'] == 'SUCCESS'
+    assert np.linalg.norm(tool_at(large['positions'][-1]) - REACHABLE) <= 0.03 + 1e-9
+    assert large['times'][-1] < small['times'][-1]            # the least time into the region
+
+
+def test_an_approach_goal_free_about_z_points_the_tool_axis(move_group) -> None:
+    q = np.array([-0.4, 0.5, 0.9, 0.3, 0.0])                    # a tool pose the arm takes
+    goal = ARM.frames(q[None])[0, -1]
+    turned = goal[:3, :3] @ np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], dtype=float)
+    answer, = ask(move_group, {'position': goal[:3, 3].tolist(), 'radius': 0.001,
+                               'orientation': quaternions(turned[None])[0].tolist(),
+                               'tolerances': [0.01, 0.01, math.pi]})    # any turn about z
+    assert answer['code'] == 'SUCCESS', answer
+    frame = ARM.frames(np.array([answer['positions'][-1]]))[0, -1]
+    axis = frame[:3, :3] @ ARM.tool_axis
+    assert math.acos(min(1.0, float(axis @ goal[:3, 2]))) <= 0.01 + 1e-6
+    assert np.linalg.norm(frame[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
+
+
+def test_codes_say_why_a_goal_is_not_planned(move_group) -> None:
+    node, _ = move_group
+    specs = {
+        'NO_IK_SOLUTION': {'position': OUT_OF_REACH},
+        'INVALID_LINK_NAME': {'position': REACHABLE, 'link': 'no_such_link'},
+        'FRAME_TRANSFORM_FAILURE': {'position': REACHABLE, 'frame': 'camera_link'},
+        'PLANNING_FAILED': {'position': REACHABLE, 'path_constraint': True},
+        'INVALID_GOAL_CONSTRAINTS': {'position': REACHABLE, 'goals': 2},
+        'INVALID_ROBOT_STATE': {'position': REACHABLE, 'start': {'joint1': 9.0}},
+    }
+    answers = ask(move_group, *specs.values())
+    for code, answer in zip(specs, answers):
+        assert answer['code'] == code, (code, answer)
+        assert answer['message'] and answer['source'] == 'trajplan_ros', answer
+        assert answer['positions'] == []                          # nothing half-made
+    joint, rotated = ask(move_group, {'position': REACHABLE, 'joint_goal': True},
+                         {'position': REACHABLE, 'orientation': [0.0, 0.0, 0.0, 1.0],
+                          'tolerances': [math.pi, 0.1, 0.1]})
+    assert joint['code'] == rotated['code'] == 'INVALID_GOAL_CONSTRAINTS'
+    assert 'joint goals are not offered' in joint['message']
+    assert 'free about the x or y axis' in rotated['message']
+    assert node.has('planner_id is ignored')
+    assert node.proc.poll() is None                               # still serving
+    again, = ask(move_group, {'position': REACHABLE})
+    assert again['code'] == 'SUCCESS'
+
+
+def test_a_five_joint_arm_asked_a_pose_it_cannot_take_says_how_far(move_group) -> None:
+    q = np.array([0.3, 0.4, -0.6, 0.5, 0.0])
+    frame = ARM.frames(q[None])[0, -1]
+    turned = frame[:3, :3] @ np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)
+    answer, = ask(move_group, {'position': frame[:3, 3].tolist(), 'radius': 0.001,
+                               'orientation': quaternions(turned[None])[0].tolist(),
+                               'tolerances': [0.01, 0.01, 0.01]})
+    assert answer['code'] == 'GOAL_CONSTRAINTS_VIOLATED', answer
+    assert 'rad from' in answer['message']
+
+
+def test_without_moveit_msgs_the_node_refuses_to_start_with_how_to_get_it(
+        start_node: Callable[..., NodeProcess], ros_env: dict[str, str]) -> None:
+    loads = subprocess.run([sys.executable, '-c', 'import moveit_msgs'], env=ros_env,
+                           capture_output=True, timeout=60)
+    if loads.returncode == 0:
+        pytest.skip('moveit_msgs loads in the test environment: nothing to refuse')
+    node = start_node('-r', '__ns:=/moveit_absent', '-p', 'moveit_interfaces:=true',
+                      ready=False, env=ros_env)
+    node.wait_for('moveit_interfaces needs moveit_msgs, which does not load here')
+    assert node.proc.wait(timeout=30) == 2
+
+
+def test_pymoveit2_plans_position_and_approach_goals_through_the_node(move_group) -> None:
+    _, env = move_group
+    q = np.array([-0.4, 0.5, 0.9, 0.3, 0.0])
+    goal = ARM.frames(q[None])[0, -1]
+    start = [0.1, 0.0, 0.2, 0.0, 0.0]
+    spec = {'namespace': NS, 'joints': list(ARM.joint_names), 'base': 'base_link',
+            'tip': 'tool_link',
+            'start': start, 'goals': [
+                {'position': list(REACHABLE)},
+                {'position': goal[:3, 3].tolist(),
+                 'quat_xyzw': quaternions(goal[None, :3, :3])[0].tolist(),
+                 'tolerance_orientation': [0.01, 0.01, math.pi]},
+                {'position': list(OUT_OF_REACH)}]}
+    done = subprocess.run([sys.executable, str(CLIENT.with_name('pymoveit2_client.py')),
+                           json.dumps(spec)], env=env,
+                          capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    point, approach, unreachable = map(json.loads, done.stdout.splitlines())
+    for answer in (point, approach):
+        assert answer['joint_names'] == list(ARM.joint_names)
+        assert answer['positions'][0] == start and answer['times'][0] == 0.0
+    assert np.linalg.norm(tool_at(point['positions'][-1]) - REACHABLE) <= 0.001 + 1e-9
+    frame = ARM.frames(np.array([approach['positions'][-1]]))[0, -1]
+    assert float((frame[:3, :3] @ ARM.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9
+    assert unreachable is None                                  # pymoveit2: no trajectory

@@ -1,0 +1,314 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+move_group's planning service, for MoveIt's clients (pymoveit2, MoveGroupInterface).
+
+With the parameter ``moveit_interfaces`` the node serves ``plan_kinematic_path``
+(moveit_msgs/srv/GetMotionPlan) beside its own interfaces. A request becomes one of the node's
+jobs (``goal_job``), planned in turn with the other calls; its outcome becomes the response
+(``fill_response``): the joint trajectory from the start, and a MoveItErrorCodes whose message
+is the planner's reason.
+
+A goal is one ``Constraints`` with a PositionConstraint on the tip link: the region (a sphere,
+or a box's inscribed sphere) is the position tolerance, and the plan is the least-time motion
+into it, not to its centre (``search.region``). An OrientationConstraint beside it makes the
+goal a pose (its least tolerance the orientation tolerance), or, with the z tolerance pi or
+more, an approach goal (the tool's z axis within the lesser of the x and y tolerances of the
+orientation's z axis); all three pi or more: position only. What a direct motion cannot
+promise (path constraints, visibility constraints, joint goals, several goal regions) is
+refused with the reason, never ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how
+to get it.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, Callable
+
+from defusedxml import ElementTree
+import numpy as np
+from trajplan_ros.planning import Mode, PlanStatus
+from trajplan_ros.ros.job import Outcome
+from trajplan_ros.ros.mailbox import Job
+from trajplan_ros.ros.messages import trajectory_msg
+from trajplan_ros.ros.settings import Settings
+
+__all__ = ['HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'fill_response', 'goal_job',
+           'moveit_types', 'srdf_groups']
+
+#: The error code's source, as move_group names its own.
+SOURCE = 'trajplan_ros'
+#: How to get moveit_msgs on each route.
+HOW_TO = ('with ROS from apt: sudo apt install ros-jazzy-moveit-msgs; with the PyPI wheels: '
+          'build ../shared/ros_interfaces with its build_ros_interfaces.sh (moveit_msgs) and '
+          'put the printed PYTHONPATH and LD_LIBRARY_PATH in the environment')
+#: MoveIt's fields that choose among its planners: read, logged once, not used.
+IGNORED = ('planner_id', 'pipeline_id', 'num_planning_attempts', 'workspace_parameters')
+_FREE = math.pi                       # a tolerance this large leaves the rotation free
+
+
+def moveit_types() -> Any:
+    """Return moveit_msgs' modules (msg, srv); ValueError with how to get it if it fails."""
+    try:
+        from moveit_msgs import msg, srv
+        from rclpy.type_support import check_for_type_support
+
+        check_for_type_support(srv.GetMotionPlan)
+    except Exception as exc:  # noqa: BLE001 - not installed, or its C libraries do not load
+        raise ValueError(f'moveit_interfaces needs moveit_msgs, which does not load here '
+                         f'({type(exc).__name__}: {str(exc).splitlines()[0]}): '
+                         f'{HOW_TO}') from None
+    return msg, srv
+
+
+class Refusal(ValueError):
+    """A request refused before planning: MoveItErrorCodes' name of the code, and why."""
+
+    def __init__(self, code: str, reason: str) -> None:
+        super().__init__(reason)
+        self.code = code
+
+
+def srdf_groups(srdf: str) -> tuple[str, ...]:
+    """Return the names of an SRDF's planning groups (none for an empty or broken SRDF)."""
+    if not srdf:
+        return ()
+    try:
+        root = ElementTree.fromstring(srdf)
+    except Exception:  # noqa: BLE001 - untrusted text: a broken SRDF names no group
+        return ()
+    return tuple(g.get('name', '') for g in root.iter('group'))
+
+
+def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: Any,
+             ignored: Callable[[str], None]) -> Job:
+    """
+    Return the job of a MotionPlanRequest (Refusal: why and with which code it is refused).
+
+    ``srdf``: the semantic description in use (its groups name the group); ``ignored`` is told
+    each of MoveIt's planner-choosing fields that is set (``IGNORED``).
+    """
+    s = settings
+    groups = srdf_groups(srdf)
+    if request.group_name and groups and request.group_name not in groups:
+        raise Refusal('INVALID_GROUP_NAME', f"group '{request.group_name}' is not in the SRDF "
+                                            f"(groups: {', '.join(groups)})")
+    for name in IGNORED[:3]:
+        if getattr(request, name):
+            ignored(name)
+    if request.workspace_parameters.header.frame_id:
+        ignored('workspace_parameters')
+    if _has_constraints(request.path_constraints):
+        raise Refusal('PLANNING_FAILED', 'path constraints are not offered: a direct motion '
+                                         'cannot promise them along the way')
+    if len(request.goal_constraints) != 1:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS',
+                      f'{len(request.goal_constraints)} goal regions given; one is planned')
+    goal = request.goal_constraints[0]
+    if goal.visibility_constraints:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
+    if goal.joint_constraints:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'joint goals are not offered yet: give the '
+                                                  'tip link a position (and orientation)')
+    if len(goal.position_constraints) != 1 or len(goal.orientation_constraints) > 1:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS',
+                      f'{len(goal.position_constraints)} position and '
+                      f'{len(goal.orientation_constraints)} orientation constraints given: one '
+                      'position constraint is planned, with at most one orientation constraint')
+    start = _start_state(request.start_state, s)
+    position = goal.position_constraints[0]
+    _check_link(position.link_name, s)
+    frame = _frame(position.header.frame_id, s)
+    centre, radius = _region(position)
+    job = Job(label, tuple(centre.tolist()), tolerance=radius, future=future, frame=frame,
+              plan_only=True, start_state=start, answer_path=False)
+    job.goal_orientation = 'ignore'
+    changes: dict[str, Any] = {'mode': Mode.FREE}
+    if goal.orientation_constraints:
+        _orient(job, changes, goal.orientation_constraints[0], frame, s)
+    _check_offset(position, job, s)
+    scale = {f'{kind}_scaling': factor for kind, factor in (
+        ('velocity', request.max_velocity_scaling_factor),
+        ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
+    if scale:                                 # MoveIt's rule: any other factor means 1
+        changes['motion'] = dataclasses.replace(s.request.motion, **scale)
+    if request.allowed_planning_time > 0.0:
+        changes['max_planning_time'] = float(request.allowed_planning_time)
+    job.request_changes = changes
+    return job
+
+
+def _has_constraints(constraints: Any) -> bool:
+    return bool(constraints.joint_constraints or constraints.position_constraints
+                or constraints.orientation_constraints or constraints.visibility_constraints)
+
+
+def _start_state(state: Any, settings: Settings) -> dict[str, float]:
+    """Return the planned joints' angles a RobotState gives (the others come from the node)."""
+    names, positions = list(state.joint_state.name), list(state.joint_state.position)
+    if len(names) != len(positions):
+        raise Refusal('INVALID_ROBOT_STATE', f'start_state has {len(names)} joint names and '
+                                             f'{len(positions)} positions')
+    given = dict(zip(names, map(float, positions)))
+    arm = settings.arm
+    start = {}
+    for name, low, high in zip(arm.joint_names, arm.lower, arm.upper):
+        if name not in given:
+            continue
+        q = given[name]
+        if not math.isfinite(q) or not low - 1e-6 <= q <= high + 1e-6:
+            raise Refusal('INVALID_ROBOT_STATE', f'start_state: {name} = {q} rad is outside '
+                                                 f'its limits [{low:g}, {high:g}]')
+        start[name] = q
+    return start
+
+
+def _check_link(link: str, settings: Settings) -> None:
+    tip = settings.arm.tip_link or 'the tool'
+    if link and link != settings.arm.tip_link:
+        raise Refusal('INVALID_LINK_NAME', f"constraints on link '{link}': this node plans "
+                                           f"the tip link '{tip}'")
+
+
+def _frame(frame: str, settings: Settings) -> str:
+    if frame and frame != settings.base_frame:
+        try:
+            settings.frames.check(frame)
+        except ValueError as exc:
+            raise Refusal('FRAME_TRANSFORM_FAILURE', str(exc)) from None
+    return frame
+
+
+def _region(position: Any) -> tuple[np.ndarray, float]:
+    """Return a PositionConstraint's region as a ball: its centre (its frame) and radius, m."""
+    volume = position.constraint_region
+    if volume.meshes:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'a mesh region is not offered: give a '
+                                                  'sphere or a box')
+    if len(volume.primitives) != 1:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'{len(volume.primitives)} primitives in '
+                                                  'the position region; one is planned')
+    shape = volume.primitives[0]
+    dims = list(shape.dimensions)
+    if shape.type == shape.SPHERE and len(dims) >= 1:
+        radius = dims[0]
+    elif shape.type == shape.BOX and len(dims) >= 3:
+        radius = min(dims[:3]) / 2                   # the box's inscribed ball
+    else:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'position region of type {shape.type} with '
+                                                  f'dimensions {dims}: a sphere or a box is '
+                                                  'planned')
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'position region of size {radius}')
+    p = volume.primitive_poses[0].position if volume.primitive_poses else None
+    centre = np.array([p.x, p.y, p.z] if p is not None else [0.0, 0.0, 0.0])
+    if not np.all(np.isfinite(centre)):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'position region at {centre.tolist()}')
+    return centre, float(radius)
+
+
+def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
+            settings: Settings) -> None:
+    """Make ``job`` a pose or approach goal as an OrientationConstraint says."""
+    _check_link(constraint.link_name, settings)
+    if (constraint.header.frame_id or frame) != frame:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'the position and orientation constraints '
+                                                  'are in different frames')
+    o = constraint.orientation
+    q = (o.x, o.y, o.z, o.w)
+    if not (all(map(math.isfinite, q)) and any(q)):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'orientation {list(q)} is not a rotation')
+    tol = [constraint.absolute_x_axis_tolerance, constraint.absolute_y_axis_tolerance,
+           constraint.absolute_z_axis_tolerance]
+    if not all(math.isfinite(t) and t > 0.0 for t in tol):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'orientation tolerances {tol}: each must '
+                                                  'be positive')
+    free = [t >= _FREE for t in tol]
+    if all(free):
+        return
+    job.orientation = q
+    if free[2] and not any(free[:2]):
+        job.goal_orientation = 'approach'
+        changes.update(mode=Mode.APPROACH, axis_tolerance=min(tol[:2]))
+    elif not any(free):
+        job.goal_orientation = 'pose'
+        changes.update(mode=Mode.POSE, orientation_tolerance=min(tol))
+    else:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'a rotation free about the x or y axis is not '
+                                                  'offered; free about z, it is an approach goal')
+
+
+def _check_offset(position: Any, job: Job, settings: Settings) -> None:
+    """Refuse a target_point_offset that is not the node's tool point."""
+    o = position.target_point_offset
+    offset = np.array([o.x, o.y, o.z])
+    tool = settings.arm.tool_point
+    if not np.allclose(offset, tool, atol=1e-9):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS',
+                      f'target_point_offset {offset.tolist()} m: this node plans the tool point '
+                      f'{tool.tolist()} m in the tip link (the tool_offset parameter)')
+
+
+def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
+    """
+    Return MoveItErrorCodes' name for the outcome of ``job``, and its message.
+
+    A goal not reached is out of reach (NO_IK_SOLUTION) unless it asked an orientation and
+    missed it (GOAL_CONSTRAINTS_VIOLATED: an arm of five joints asked a pose it cannot take;
+    the message says how far the best one is), or every motion to it collides
+    (PLANNING_FAILED). None: the node shut down before planning it.
+    """
+    if outcome is None:
+        return 'PREEMPTED', 'the planner is shutting down'
+    if outcome.succeeded:
+        return 'SUCCESS', outcome.reason
+    result = outcome.result
+    status = result.status if result is not None else None
+    if status is PlanStatus.TIMED_OUT:
+        return 'TIMED_OUT', outcome.reason
+    if status is PlanStatus.CANCELLED:
+        return 'PREEMPTED', outcome.reason
+    if status is PlanStatus.REJECTED:
+        inside = 'inside obstacle' in outcome.reason       # planner._check_world's words
+        return ('GOAL_IN_COLLISION' if inside else 'INVALID_GOAL_CONSTRAINTS'), outcome.reason
+    if status is PlanStatus.NOT_REACHED:
+        if result.clearance_pair:                   # reached, but every motion collides
+            return 'PLANNING_FAILED', outcome.reason
+        if job.goal_orientation in ('approach', 'pose'):
+            angle = (result.orientation_error_rad if job.goal_orientation == 'pose'
+                     else result.axis_error_rad)
+            limit = job.request_changes.get('orientation_tolerance'
+                                            if job.goal_orientation == 'pose'
+                                            else 'axis_tolerance', 0.0)
+            if not angle <= limit:
+                return 'GOAL_CONSTRAINTS_VIOLATED', outcome.reason
+        return 'NO_IK_SOLUTION', outcome.reason
+    return 'PLANNING_FAILED', outcome.reason
+
+
+def fill_response(response: Any, outcome: Outcome | None, code: tuple[str, str],
+                  settings: Settings, group: str, header: Any, codes: Any) -> Any:
+    """Fill a MotionPlanResponse: the trajectory (on success), the start, the code and why."""
+    name, message = code
+    response.group_name = group
+    response.error_code = codes(val=getattr(codes, name), message=message, source=SOURCE)
+    arm = settings.arm
+    if outcome is not None and outcome.start is not None:
+        state = response.trajectory_start.joint_state
+        state.header = header
+        state.name = list(arm.joint_names)
+        state.position = [float(q) for q in outcome.start]
+    if outcome is not None and outcome.result is not None:
+        response.planning_time = float(outcome.result.plan_time_s)
+    if name == 'SUCCESS' and outcome.trajectory is not None:
+        trajectory = trajectory_msg(outcome.trajectory)
+        trajectory.header = header
+        first = trajectory.points[0]
+        if first.time_from_start.sec or first.time_from_start.nanosec:   # MoveIt's: the start
+            rest = np.zeros(len(outcome.start))
+            trajectory.points.insert(0, type(first)(
+                positions=outcome.start.tolist(),
+                velocities=rest.tolist() if len(first.velocities) else [],
+                accelerations=rest.tolist() if len(first.accelerations) else []))
+        response.trajectory.joint_trajectory = trajectory
+    return response
