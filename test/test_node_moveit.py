@@ -22,7 +22,10 @@ from typing import Any, Callable, Iterator
 from node_under_test import ARM, NodeProcess
 import numpy as np
 import pytest
+from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.kinematics.rotations import quaternions
+from trajplan_ros.tools.bench.cases import PUBLISHED
+import yaml
 
 pytestmark = pytest.mark.dds
 
@@ -31,6 +34,7 @@ SERVICE = f'{NS}/plan_kinematic_path'                 # as move_group's: not pri
 CLIENT = Path(__file__).with_name('moveit_client.py')
 REACHABLE = (0.151171, 0.19162, 0.172124)
 OUT_OF_REACH = (0.05, -0.05, -0.25)
+SO101 = PUBLISHED['so101']
 
 
 @pytest.fixture(scope='module')
@@ -132,6 +136,24 @@ def test_a_five_joint_arm_asked_a_pose_it_cannot_take_says_how_far(move_group) -
     assert 'rad from' in answer['message']
 
 
+def test_a_cartesian_path_is_refused_at_once(move_group) -> None:
+    _, env = move_group
+    script = ('import rclpy\n'
+              'from moveit_msgs.srv import GetCartesianPath\n'
+              'rclpy.init()\n'
+              'node = rclpy.create_node("cartesian_client")\n'
+              f'client = node.create_client(GetCartesianPath, "{NS}/compute_cartesian_path")\n'
+              'assert client.wait_for_service(timeout_sec=30.0)\n'
+              'future = client.call_async(GetCartesianPath.Request())\n'
+              'rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)\n'
+              'code = future.result().error_code\n'
+              'print(code.val, code.message)\n')
+    done = subprocess.run([sys.executable, '-c', script], env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.startswith('-1 straight-line tool paths are not offered'), done.stdout
+
+
 def test_without_moveit_msgs_the_node_refuses_to_start_with_how_to_get_it(
         start_node: Callable[..., NodeProcess], ros_env: dict[str, str]) -> None:
     loads = subprocess.run([sys.executable, '-c', 'import moveit_msgs'], env=ros_env,
@@ -169,3 +191,39 @@ def test_pymoveit2_plans_position_and_approach_goals_through_the_node(move_group
     frame = ARM.frames(np.array([approach['positions'][-1]]))[0, -1]
     assert float((frame[:3, :3] @ ARM.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9
     assert unreachable is None                                  # pymoveit2: no trajectory
+
+
+@pytest.fixture(scope='module')
+def so101_move_group(start_node: Callable[..., NodeProcess], moveit_msgs_env: dict[str, str],
+                     tmp_path_factory: pytest.TempPathFactory) -> Iterator[NodeProcess]:
+    """Run the node as move_group for the SO-101 from its URDF (parameters from a file)."""
+    params = tmp_path_factory.mktemp('so101') / 'params.yaml'
+    params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'robot_description': SO101.urdf.read_text(encoding='utf-8'),
+        'base_link': SO101.base_link, 'tip_link': SO101.tip_link,
+        'moveit_interfaces': True, 'angular_velocity': 1.0}}}), encoding='utf-8')
+    node = start_node('-r', f'__ns:={NS}_so101', '-r', '__node:=move_group', '--params-file',
+                      str(params), ready=False, env=moveit_msgs_env)
+    node.wait_for(r'move_group\]: ready: ')
+    yield node
+    assert node.stop() == 0, node.output
+
+
+def test_pymoveit2_picks_from_above_with_the_so101(so101_move_group, moveit_msgs_env) -> None:
+    arm = ArmModel.from_urdf(SO101.urdf, SO101.base_link, SO101.tip_link)
+    q = np.array([0.3, 0.5, 0.4, 0.9, -0.2])
+    goal = arm.frames(q[None])[0, -1]
+    spec = {'namespace': f'{NS}_so101', 'joints': list(arm.joint_names),
+            'base': SO101.base_link, 'tip': SO101.tip_link, 'start': [0.0] * 5, 'goals': [
+                {'position': goal[:3, 3].tolist(),
+                 'quat_xyzw': quaternions(goal[None, :3, :3])[0].tolist(),
+                 'tolerance_orientation': [0.01, 0.01, math.pi]}]}
+    done = subprocess.run([sys.executable, str(CLIENT.with_name('pymoveit2_client.py')),
+                           json.dumps(spec)], env=moveit_msgs_env,
+                          capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    answer = json.loads(done.stdout)
+    assert answer is not None, so101_move_group.output
+    frame = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
+    assert np.linalg.norm(frame[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
+    assert float((frame[:3, :3] @ arm.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9

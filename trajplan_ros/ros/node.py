@@ -446,7 +446,18 @@ class PlannerNode(Node):
         self._moveit_msg, moveit_srv = moveit.moveit_types()
         self.create_service(moveit_srv.GetMotionPlan, 'plan_kinematic_path',
                             self._on_motion_plan, qos_profile=KEEP_ALL, callback_group=calls)
-        self.get_logger().info("MoveIt's interfaces ready: plan_kinematic_path")
+        self.create_service(moveit_srv.GetCartesianPath, 'compute_cartesian_path',
+                            self._on_cartesian_path, qos_profile=KEEP_ALL)
+        self.get_logger().info("MoveIt's interfaces ready: plan_kinematic_path "
+                               '(compute_cartesian_path answers that it is not offered)')
+
+    def _on_cartesian_path(self, request: Any, response: Any) -> Any:
+        """Answer at once: straight-line tool paths are not what this planner plans."""
+        codes = self._moveit_msg.MoveItErrorCodes
+        response.error_code = codes(val=codes.PLANNING_FAILED, source=moveit.SOURCE,
+                                    message='straight-line tool paths are not offered: '
+                                            'plan_kinematic_path plans the least-time motion')
+        return response
 
     async def _on_motion_plan(self, request: Any, response: Any) -> Any:
         """Answer move_group's plan_kinematic_path (``ros.moveit_interfaces``)."""
