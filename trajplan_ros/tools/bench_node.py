@@ -61,7 +61,7 @@ from trajplan_ros.tools.node_process import (COMPILE_BOUND_S, PlannerProcess, ro
 from trajplan_ros.tools.ros_client import plan_request, RosClient
 
 
-__all__ = ['main']
+__all__ = ['description_args', 'main', 'timed_call', 'tool_goals']
 
 #: The targets: the node's own overhead per call, and a parameter get's answer during plans.
 MAX_MEDIAN_OVERHEAD_S = 5e-3
@@ -76,7 +76,7 @@ MAX_PEAK_MB = (250.0, 400.0)
 TIMEOUT_S = 120.0
 
 
-def _goals(arm: ArmModel, count: int, seed: int) -> np.ndarray:
+def tool_goals(arm: ArmModel, count: int, seed: int) -> np.ndarray:
     """Tool positions of seeded random configurations inside the arm's limits."""
     rng = np.random.default_rng(seed)
     q = rng.uniform(np.maximum(arm.lower, -np.pi), np.minimum(arm.upper, np.pi),
@@ -96,8 +96,8 @@ def _ms(seconds: float) -> str:
     return f'{1e3 * seconds:.2f} ms'
 
 
-def _timed_call(ros: RosClient, client: Any, request: Any,
-                timeout: float = TIMEOUT_S) -> tuple[Any | None, float]:
+def timed_call(ros: RosClient, client: Any, request: Any,
+               timeout: float = TIMEOUT_S) -> tuple[Any | None, float]:
     """
     Call ``client``: (answer or None on timeout, round trip in s).
 
@@ -138,7 +138,7 @@ def _calls(node: PlannerProcess, ros: RosClient, client: Any, goals: np.ndarray,
     """
     trips, sizes = [], []
     for i, goal in enumerate(goals):
-        answer, trip = _timed_call(ros, client, plan_request(tuple(goal)))
+        answer, trip = timed_call(ros, client, plan_request(tuple(goal)))
         if answer is None:
             return f'no answer within {TIMEOUT_S:.0f} s for goal {describe_goal(goal)}'
         trips.append(trip)
@@ -210,7 +210,7 @@ def _warm_up(node: PlannerProcess, ros: RosClient, publisher: Any, params: Any) 
     warmed = r'\]: goal #\d+ \(nan, nan, nan\) m from '
     while not node.matches(warmed) and time.monotonic() < deadline:
         publisher.publish(Point(x=nan, y=nan, z=nan))
-        _timed_call(ros, params, GetParameters.Request(names=['angular_velocity']))
+        timed_call(ros, params, GetParameters.Request(names=['angular_velocity']))
         threading.Event().wait(0.05)
 
 
@@ -274,7 +274,7 @@ def _stream_phase(node: PlannerProcess, ros: RosClient, goals: np.ndarray,
     def poll_parameters() -> None:
         request = GetParameters.Request(names=['angular_velocity'])
         while not stop.is_set():
-            answer, trip = _timed_call(ros, params, request)
+            answer, trip = timed_call(ros, params, request)
             latencies.append(trip if answer is not None else float('inf'))
             stop.wait(0.01)
 
@@ -300,8 +300,8 @@ def _start_phase(node: PlannerProcess, ros: RosClient, began: float, goal: np.nd
     when every target is met.
     """
     offered = time.perf_counter() - began
-    first, _ = _timed_call(ros, ros.client(GetPlan, 'compute_plan'), plan_request(tuple(goal)),
-                           COMPILE_BOUND_S)
+    first, _ = timed_call(ros, ros.client(GetPlan, 'compute_plan'), plan_request(tuple(goal)),
+                          COMPILE_BOUND_S)
     answered = time.perf_counter() - began
     ready = node.wait_for(r'\]: ready: ', COMPILE_BOUND_S)
     kernels = node.wait_for(r'\]: ((?:compiled|loaded) .*planning kernels in .*)$', 0.0)
@@ -314,7 +314,7 @@ def _start_phase(node: PlannerProcess, ros: RosClient, began: float, goal: np.nd
     return bool(ready and first) and offered <= MAX_START_S and answered <= most
 
 
-def _description_args(args: argparse.Namespace, folder: str) -> list[str]:
+def description_args(args: argparse.Namespace, folder: str) -> list[str]:
     """
     Return the node's --ros-args for ``--urdf`` and ``--scene``.
 
@@ -347,9 +347,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     arm = (ArmModel.from_urdf(args.urdf, None, args.tip_link) if args.urdf else paper_arm())
-    call_goals = _goals(arm, args.calls, args.seed)
-    burst_goals = _goals(arm, args.calls, args.seed + 1)
-    stream_goals = _goals(arm, args.goals, args.seed + 2)
+    call_goals = tool_goals(arm, args.calls, args.seed)
+    burst_goals = tool_goals(arm, args.calls, args.seed + 1)
+    stream_goals = tool_goals(arm, args.goals, args.seed + 2)
     env = ros_environment()
     os.environ.update(env)
     print(f'planner_node benchmark: python -m trajplan_ros.tools.bench_node '
@@ -358,7 +358,7 @@ def main(argv: Sequence[str] | None = None) -> int:
           f'{platform.python_version()}, {get_rmw_implementation_identifier()}')
     folder = tempfile.TemporaryDirectory(prefix='trajplan-bench-node-')
     began = time.perf_counter()
-    node = PlannerProcess(_description_args(args, folder.name), env=env)
+    node = PlannerProcess(description_args(args, folder.name), env=env)
     ros = RosClient('trajplan_bench')
     try:
         ros.client(GetPlan, 'plan_trajectory')
