@@ -5,8 +5,8 @@ plan_kinematic_path's round trip beside the plan: ``python -m trajplan_ros.tools
 
 The node runs as move_group with ``moveit_interfaces`` (a child process, a DDS domain of its
 own); this process is a MoveIt client. ``--calls`` GetMotionPlan requests on tool positions of
-seeded random in-limit configurations (a sphere of ``--radius`` m, from q = 0, as pymoveit2
-sends them), each sent when the last is answered; as many empty service calls (the node's
+seeded random in-limit configurations (a sphere of ``--radius`` m, from q = 0 clipped to the
+limits, as pymoveit2 sends them), each sent when the last is answered; as many empty service calls (the node's
 get_parameters with no name) between them. A call's overhead is its round trip minus the
 plan's own time (the answer's ``planning_time``, the library's ``plan_time_s``). Target: the
 median overhead at most twice the median empty round trip of the same run. moveit_msgs must
@@ -56,6 +56,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     arm = ArmModel.from_urdf(args.urdf, None, args.tip_link) if args.urdf else paper_arm()
     goals = tool_goals(arm, args.calls, args.seed)
+    start = dict(zip(arm.joint_names, np.clip(0.0, arm.lower, arm.upper).tolist()))  # as the node
     env = ros_environment()
     os.environ.update(env)                       # this process joins the node's domain
     folder = tempfile.TemporaryDirectory(prefix='trajplan-bench-moveit-')
@@ -69,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         trips, plans, empties, codes = [], [], [], []
         for goal in goals:
             request = srv.GetMotionPlan.Request(motion_plan_request=motion_request(
-                goal.tolist(), radius=args.radius, start=dict.fromkeys(arm.joint_names, 0.0)))
+                goal.tolist(), radius=args.radius, start=start))
             answer, trip = timed_call(ros, client, request)
             response = answer.motion_plan_response
             trips.append(trip)
