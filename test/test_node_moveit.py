@@ -237,3 +237,40 @@ def test_the_bench_measures_round_trips_beside_the_plan(moveit_msgs_env) -> None
     assert 'plan_kinematic_path: 3 requests (the paper arm, a sphere of 0.001 m), 3 SUCCESS' \
         in done.stdout, done.stdout
     assert 'target: median overhead <= 2 x the empty call' in done.stdout
+
+
+@pytest.fixture(scope='module')
+def executing(start_node: Callable[..., NodeProcess], moveit_msgs_env: dict[str, str],
+              control_msgs_env: dict[str, str]) -> Iterator[tuple[NodeProcess, dict]]:
+    """Run move_group with execute_trajectory and the demo controller it executes through."""
+    env = {**control_msgs_env, **moveit_msgs_env}
+    controller = start_node('-r', f'__ns:={NS}_exec', ready=False, env=env,
+                            executable='demo_controller')
+    controller.wait_for(r'demo_controller\]: ready: ')
+    node = start_node('-r', f'__ns:={NS}_exec', '-r', '__node:=move_group', '-p',
+                      'moveit_interfaces:=true', ready=False, env=env)     # 0.2 rad/s: seconds
+    node.wait_for(r"move_group\]: MoveIt's interfaces ready: plan_kinematic_path, "
+                  'execute_trajectory')
+    node.wait_for(r'move_group\]: ready: ')
+    yield node, env
+    assert node.stop() == 0, node.output
+    assert controller.stop() == 0, controller.output
+
+
+def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> None:
+    node, env = executing
+    specs = [{'position': list(REACHABLE), 'execute': 'run'},
+             {'position': [0.2, -0.15, 0.1], 'execute': 'cancel'},     # 1.5 rad of joint1
+             {'position': list(REACHABLE), 'execute': 'foreign'}]
+    done = subprocess.run([sys.executable, str(CLIENT), f'{NS}_exec/plan_kinematic_path',
+                           json.dumps(specs)], env=env, capture_output=True, text=True,
+                          timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    ran, cancelled, foreign = map(json.loads, done.stdout.splitlines())
+    assert ran['code'] == 'SUCCESS' and ran['execution']['code'] == 'SUCCESS', ran
+    assert ran['execution']['status'] == 4                      # SUCCEEDED
+    assert cancelled['execution']['code'] == 'PREEMPTED', cancelled
+    assert cancelled['execution']['status'] == 5                # CANCELED
+    assert foreign['execution']['code'] == 'INVALID_MOTION_PLAN', foreign
+    assert 'executes the chain' in foreign['execution']['message']
+    assert node.has(r'execute_trajectory #\d+ .*execution: executed: reached the goal')

@@ -192,6 +192,17 @@ class ActionExecution:
         self._handed.append(motion)
         self._take.trigger()
 
+    def cancel(self, job: Job) -> None:
+        """Cancel ``job``'s motion (executor thread): it ends ``preempted``, as by a newer one."""
+        if self._waiting is not None and self._waiting.job is job:
+            self._end(self._waiting, 'preempted', 'not sent: cancelled')
+            self._waiting = None
+        for motion in self._sent:
+            if motion.job is job:
+                motion.preempted_by = motion.preempted_by or 'a cancel'
+                if motion.handle is not None and motion.state == 'accepted':
+                    motion.handle.cancel_goal_async()
+
     def shut_down(self, timeout: float) -> bool:
         """Cancel what is executing; wait up to ``timeout`` s for the cancels. True if done."""
         self._settled.clear()

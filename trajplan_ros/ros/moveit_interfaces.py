@@ -28,13 +28,14 @@ from typing import Any, Callable
 from defusedxml import ElementTree
 import numpy as np
 from trajplan_ros.planning import Mode, PlanStatus
+from trajplan_ros.ros.execution import Motion
 from trajplan_ros.ros.job import Outcome
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import trajectory_msg
 from trajplan_ros.ros.settings import Settings
 
-__all__ = ['HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'fill_response', 'goal_job',
-           'moveit_types', 'srdf_groups']
+__all__ = ['EXECUTION_CODES', 'HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'execution_motion',
+           'fill_response', 'goal_job', 'moveit_types', 'srdf_groups']
 
 #: The error code's source, as move_group names its own.
 SOURCE = 'trajplan_ros'
@@ -312,3 +313,31 @@ def fill_response(response: Any, outcome: Outcome | None, code: tuple[str, str],
                 accelerations=rest.tolist() if len(first.accelerations) else []))
         response.trajectory.joint_trajectory = trajectory
     return response
+
+
+#: How an executed motion's end (``ros.execution``'s status) reads as MoveIt's code.
+EXECUTION_CODES = {'executed': 'SUCCESS', 'preempted': 'PREEMPTED', 'shut_down': 'PREEMPTED',
+                   'refused': 'INVALID_MOTION_PLAN'}
+
+
+def execution_motion(job: Job, trajectory: Any, settings: Settings, action: str) -> Motion:
+    """
+    Return the motion of an ExecuteTrajectory goal's joint trajectory (Refusal: why not).
+
+    Its joints must be the planned chain's (in any order), its times rising from its start.
+    """
+    names = list(trajectory.joint_names)
+    arm = settings.arm
+    if sorted(names) != sorted(arm.joint_names):
+        raise Refusal('INVALID_MOTION_PLAN', f'the trajectory moves joints {names}; this node '
+                                             f'executes the chain {list(arm.joint_names)}')
+    points = trajectory.points
+    times = [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in points]
+    if not points or any(len(p.positions) != len(names) for p in points) or any(
+            b < a for a, b in zip(times, times[1:])):
+        raise Refusal('INVALID_MOTION_PLAN', 'the trajectory needs points with a position per '
+                                             'joint at rising times')
+    trajectory.header.stamp.sec = trajectory.header.stamp.nanosec = 0     # start it now
+    return Motion(job, action, trajectory, dict(zip(names, map(float, points[-1].positions))),
+                  [float(q) for q in points[0].positions], times[-1],
+                  settings.controller_timeout, settings.start_tolerance)

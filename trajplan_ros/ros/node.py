@@ -17,7 +17,10 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
 * ``compute_plan`` (nav_msgs/srv/GetPlan): answered as ``plan_trajectory``, never published.
 * ``plan_kinematic_path`` (moveit_msgs/srv/GetMotionPlan; with ``moveit_interfaces``):
   move_group's planning service for MoveIt's clients, answered with the joint trajectory and
-  MoveIt's error code (``ros.moveit_interfaces``); never published.
+  MoveIt's error code (``ros.moveit_interfaces``); never published. ``execute_trajectory``
+  (its ExecuteTrajectory action server, where control_msgs loads): a coroutine on the executor
+  thread that hands the trajectory to ``ActionExecution`` and awaits its end, which
+  ``_report_execution`` sets.
 * Frames: a stamped goal (``goal_pose``, ``clicked_point``, the services) in any link frame
   of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
   its current joint angles (``kinematics.frames``); any other frame is refused, naming the
@@ -235,6 +238,8 @@ class PlannerNode(Node):
         self.create_service(GetPlan, 'compute_plan', self._on_compute_plan,
                             qos_profile=KEEP_ALL, callback_group=calls)
         self._moveit_ignored: set[str] = set()      # MoveIt request fields said to be ignored
+        #: the ExecuteTrajectory goals executing, by goal id: their job and its end's future
+        self._moveit_executions: dict[bytes, tuple[Job, Future]] = {}
         if self.get_parameter('moveit_interfaces').value:
             self._offer_moveit(calls)
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
@@ -448,8 +453,63 @@ class PlannerNode(Node):
                             self._on_motion_plan, qos_profile=KEEP_ALL, callback_group=calls)
         self.create_service(moveit_srv.GetCartesianPath, 'compute_cartesian_path',
                             self._on_cartesian_path, qos_profile=KEEP_ALL)
-        self.get_logger().info("MoveIt's interfaces ready: plan_kinematic_path "
+        served = 'plan_kinematic_path'
+        try:
+            action_type()                                # executes through control_msgs
+        except ValueError as exc:
+            self.get_logger().warning(f'execute_trajectory not served: {exc}')
+        else:
+            from moveit_msgs.action import ExecuteTrajectory
+            from rclpy.action import ActionServer, CancelResponse
+
+            self._execute_type = ExecuteTrajectory
+            ActionServer(self, ExecuteTrajectory, 'execute_trajectory', self._on_execute,
+                         cancel_callback=self._on_execute_cancel, callback_group=calls)
+            self._cancel_accepted = CancelResponse.ACCEPT
+            served += ', execute_trajectory'
+        self.get_logger().info(f"MoveIt's interfaces ready: {served} "
                                '(compute_cartesian_path answers that it is not offered)')
+
+    async def _on_execute(self, goal: Any) -> Any:
+        """Execute an ExecuteTrajectory goal through the controller's action; end it so."""
+        s = self._settings
+        job = Job(f'execute_trajectory #{next(self._call_ids)}', (math.nan,) * 3)
+        try:
+            motion = moveit.execution_motion(job, goal.request.trajectory.joint_trajectory, s,
+                                             resolve_action(self, s.controller_action))
+        except moveit.Refusal as exc:
+            self._report_execution(job, 'refused', str(exc))
+            goal.abort()
+            return self._execution_result(exc.code, str(exc))
+        done = Future()
+        key = bytes(goal.goal_id.uuid)
+        self._moveit_executions[key] = (job, done)
+        goal.publish_feedback(self._execute_type.Feedback(state='MONITOR'))
+        if self._execution is None:
+            self._execution = ActionExecution(self, self._report_execution,
+                                              self._states.measured)
+        self._execution.submit(motion)
+        status, message = await done
+        self._moveit_executions.pop(key, None)
+        name = moveit.EXECUTION_CODES.get(status, 'CONTROL_FAILED')
+        if goal.is_cancel_requested and name == 'PREEMPTED':
+            goal.canceled()
+        elif name == 'SUCCESS':
+            goal.succeed()
+        else:
+            goal.abort()
+        return self._execution_result(name, message)
+
+    def _execution_result(self, name: str, message: str) -> Any:
+        codes = self._moveit_msg.MoveItErrorCodes
+        return self._execute_type.Result(error_code=codes(
+            val=getattr(codes, name), message=message, source=moveit.SOURCE))
+
+    def _on_execute_cancel(self, goal: Any) -> Any:
+        job, _ = self._moveit_executions.get(bytes(goal.goal_id.uuid), (None, None))
+        if job is not None and self._execution is not None:
+            self._execution.cancel(job)
+        return self._cancel_accepted
 
     def _on_cartesian_path(self, request: Any, response: Any) -> Any:
         """Answer at once: straight-line tool paths are not what this planner plans."""
@@ -653,6 +713,9 @@ class PlannerNode(Node):
     def _report_execution(self, job: Job, status: str, message: str,
                           execution: outcomes.Execution | None = None) -> None:
         """Publish and log one execution status of ``job``; an ERROR one is a warning."""
+        for waiting_job, done in self._moveit_executions.values():
+            if waiting_job is job and status != 'accepted' and not done.done():
+                done.set_result((status, message))       # an ExecuteTrajectory goal ends
         msg = self._status(job, status, message, execution=execution or outcomes.Execution())
         self._results.publish(msg)
         log = self._log.warning if msg.level == DiagnosticStatus.ERROR else self._log.info

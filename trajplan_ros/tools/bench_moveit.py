@@ -6,11 +6,11 @@ plan_kinematic_path's round trip beside the plan: ``python -m trajplan_ros.tools
 The node runs as move_group with ``moveit_interfaces`` (a child process, a DDS domain of its
 own); this process is a MoveIt client. ``--calls`` GetMotionPlan requests on tool positions of
 seeded random in-limit configurations (a sphere of ``--radius`` m, from q = 0 clipped to the
-limits, as pymoveit2 sends them), each sent when the last is answered; as many empty service calls (the node's
-get_parameters with no name) between them. A call's overhead is its round trip minus the
-plan's own time (the answer's ``planning_time``, the library's ``plan_time_s``). Target: the
-median overhead at most twice the median empty round trip of the same run. moveit_msgs must
-load here (export what build_ros_interfaces.sh prints).
+limits, as pymoveit2 sends them), each sent when the last is answered; as many empty service
+calls (the node's get_parameters with no name) between them. A call's overhead is its round
+trip minus the plan's own time (the answer's ``planning_time``, the library's
+``plan_time_s``). Target: the median overhead at most twice the median empty round trip of
+the same run. moveit_msgs must load here (export what build_ros_interfaces.sh prints).
 
 Prints the figures; exits 0 when the target is met, 1 otherwise.
 """
