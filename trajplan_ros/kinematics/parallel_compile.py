@@ -95,24 +95,34 @@ def claim(kernel: Any, args: tuple, wait: bool = True) -> Iterator[bool]:
     if path in _held:                            # a compile inside this one's (a callee's)
         yield True
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, 'a') as lock:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        lock = os.open(path, os.O_RDONLY | os.O_CREAT, 0o644)
+    except OSError:                              # no lock to be had: compile without one
+        yield True
+        return
+    try:
         deadline = time.monotonic() + (WAIT_S if wait else 0.0)
         while True:
             try:
                 fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
                 break
-            except OSError:
+            except BlockingIOError:              # the other process holds it
                 if time.monotonic() >= deadline:
                     yield wait
                     return
                 time.sleep(0.02)
+            except OSError:                      # flock not offered here: compile without it
+                yield True
+                return
         _held.add(path)
         try:
             yield True
         finally:
             _held.discard(path)
             fcntl.flock(lock, fcntl.LOCK_UN)
+    finally:
+        os.close(lock)
 
 
 class Helper:
@@ -133,7 +143,8 @@ class Helper:
         env = {**os.environ, 'PYTHONPATH': root + (os.pathsep + path if path else '')}
         try:
             self._process = subprocess.Popen(
-                [sys.executable, '-c', f'import {__name__} as p; p.compile_backwards({run!r})'],
+                [sys.executable, '-c',
+                 f'import {__name__} as p; p.compile_backwards({run!r}, {os.getpid()})'],
                 env=env,
                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         except OSError:
@@ -151,10 +162,9 @@ class Helper:
         return True
 
 
-def compile_backwards(run: str) -> None:
-    """Compile ``run``'s kernels from the last, skipping those another process holds."""
+def compile_backwards(run: str, parent: int) -> None:
+    """Compile ``run``'s kernels from the last (skipping those held) while ``parent`` lives."""
     _active[:] = [True]
-    parent = os.getppid()
 
     def orphaned() -> None:                        # its parent gone (killed), end at once
         while os.getppid() == parent:

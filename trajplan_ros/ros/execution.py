@@ -194,6 +194,9 @@ class ActionExecution:
 
     def cancel(self, job: Job) -> None:
         """Cancel ``job``'s motion (executor thread): it ends ``preempted``, as by a newer one."""
+        for motion in list(self._handed):              # handed over, not yet taken
+            if motion.job is job:
+                motion.preempted_by = 'a cancel'
         if self._waiting is not None and self._waiting.job is job:
             self._end(self._waiting, 'preempted', 'not sent: cancelled')
             self._waiting = None
@@ -216,6 +219,9 @@ class ActionExecution:
             motion = self._handed.popleft()
             if self._stopping:
                 self._end(motion, 'shut_down', 'not sent: shutting down')
+                continue
+            if motion.preempted_by:                     # cancelled before it was taken
+                self._end(motion, 'preempted', 'not sent: cancelled')
                 continue
             if self._waiting is not None:
                 self._end(self._waiting, 'preempted',

@@ -49,6 +49,7 @@ class Job:
     request_changes: Mapping[str, Any] = field(default_factory=dict)
     start_state: Mapping[str, float] = field(default_factory=dict)   # joint angles it gives
     answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)
+    ended: tuple[str, str] = ('', '')        # its first outcome on plan_results: status, reason
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False
     planned_answer: bool = False     # the call was answered with a plan

@@ -133,7 +133,7 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
     if scale:                                 # MoveIt's rule: any other factor means 1
         changes['motion'] = dataclasses.replace(s.request.motion, **scale)
-    if request.allowed_planning_time > 0.0:
+    if 0.0 < request.allowed_planning_time < math.inf:
         changes['max_planning_time'] = float(request.allowed_planning_time)
     job.request_changes = changes
     return job
@@ -152,12 +152,13 @@ def _start_state(state: Any, settings: Settings) -> dict[str, float]:
                                              f'{len(positions)} positions')
     given = dict(zip(names, map(float, positions)))
     arm = settings.arm
+    margin = settings.request.start_limit_margin         # as the node's own start is held
     start = {}
     for name, low, high in zip(arm.joint_names, arm.lower, arm.upper):
         if name not in given:
             continue
         q = given[name]
-        if not math.isfinite(q) or not low - 1e-6 <= q <= high + 1e-6:
+        if not math.isfinite(q) or not low - margin <= q <= high + margin:
             raise Refusal('INVALID_ROBOT_STATE', f'start_state: {name} = {q} rad is outside '
                                                  f'its limits [{low:g}, {high:g}]')
         start[name] = q
@@ -212,7 +213,8 @@ def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
             settings: Settings) -> None:
     """Make ``job`` a pose or approach goal as an OrientationConstraint says."""
     _check_link(constraint.link_name, settings)
-    if (constraint.header.frame_id or frame) != frame:
+    base = settings.base_frame
+    if (constraint.header.frame_id or base) != (frame or base):
         raise Refusal('INVALID_GOAL_CONSTRAINTS', 'the position and orientation constraints '
                                                   'are in different frames')
     o = constraint.orientation
@@ -259,8 +261,9 @@ def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
     the message says how far the best one is), or every motion to it collides
     (PLANNING_FAILED). None: the node shut down before planning it.
     """
-    if outcome is None:
-        return 'PREEMPTED', 'the planner is shutting down'
+    if outcome is None:                       # not planned: shutting down, queue full, a fault
+        status, reason = job.ended
+        return ('PREEMPTED' if status == 'shut_down' else 'PLANNING_FAILED'), reason
     if outcome.succeeded:
         return 'SUCCESS', outcome.reason
     result = outcome.result

@@ -489,6 +489,8 @@ class PlannerNode(Node):
             self._execution = ActionExecution(self, self._report_execution,
                                               self._states.measured)
         self._execution.submit(motion)
+        if goal.is_cancel_requested:               # asked before it was registered
+            self._execution.cancel(job)
         status, message = await done
         self._moveit_executions.pop(key, None)
         name = moveit.EXECUTION_CODES.get(status, 'CONTROL_FAILED')
@@ -579,6 +581,7 @@ class PlannerNode(Node):
             if job.reported:
                 return
             job.reported = True
+            job.ended = job.ended if job.ended[0] else (status, reason)
         self._results.publish(self._status(job, status, reason, motion_time_s=motion_time_s,
                                            clearance=clearance, via_points=via_points))
 
@@ -654,7 +657,7 @@ class PlannerNode(Node):
     def _plan(self, job: Job) -> jobs.Outcome:
         """Plan one job into its messages and log line."""
         s = self._settings
-        self._prepare_for(s)
+        self._prepare_for(s.planning_with(**job.request_changes) if job.request_changes else s)
         if s.execution == 'action':         # the controller's state: it is what moves first
             deadline = time.monotonic() + s.controller_timeout
             while not (self._states.wait_for(s.arm.joint_names, SHUTDOWN_STEP_S / 5)
@@ -733,6 +736,8 @@ class PlannerNode(Node):
 
         At shutdown (no ``reason``) it logs why; a fault was logged already.
         """
+        if not job.ended[0]:                  # what a MoveIt caller is told, before the answer
+            job.ended = (status, reason or 'the planner is shutting down')
         if job.is_call:
             self._answer(job, None)
         if self._mark_counted(job):
