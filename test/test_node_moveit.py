@@ -35,6 +35,7 @@ CLIENT = Path(__file__).with_name('moveit_client.py')
 REACHABLE = (0.151171, 0.19162, 0.172124)
 OUT_OF_REACH = (0.05, -0.05, -0.25)
 SO101 = PUBLISHED['so101']
+PANDA = PUBLISHED['panda']
 
 
 @pytest.fixture(scope='module')
@@ -193,40 +194,72 @@ def test_pymoveit2_plans_position_and_approach_goals_through_the_node(move_group
     assert unreachable is None                                  # pymoveit2: no trajectory
 
 
+def urdf_move_group(start_node: Callable[..., NodeProcess], env: dict[str, str], folder: Path,
+                    published: Any, namespace: str) -> NodeProcess:
+    """Run the node as move_group for a published arm from its URDF (parameters from a file)."""
+    params = folder / 'params.yaml'
+    params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'robot_description': published.urdf.read_text(encoding='utf-8'),
+        'base_link': published.base_link, 'tip_link': published.tip_link,
+        'moveit_interfaces': True, 'angular_velocity': 1.0}}}), encoding='utf-8')
+    node = start_node('-r', f'__ns:={namespace}', '-r', '__node:=move_group', '--params-file',
+                      str(params), ready=False, env=env)
+    node.wait_for(r'move_group\]: ready: ')
+    return node
+
+
+def pymoveit2_plans(published: Any, namespace: str, env: dict[str, str],
+                    goals: list[dict[str, Any]]) -> list[Any]:
+    """Plan ``goals`` (MoveIt2.plan's keywords) with pymoveit2 from the arm's q = 0, clipped."""
+    arm = ArmModel.from_urdf(published.urdf, published.base_link, published.tip_link)
+    spec = {'namespace': namespace, 'joints': list(arm.joint_names),
+            'base': published.base_link, 'tip': published.tip_link,
+            'start': np.clip(0.0, arm.lower, arm.upper).tolist(), 'goals': goals}
+    done = subprocess.run([sys.executable, str(CLIENT.with_name('pymoveit2_client.py')),
+                           json.dumps(spec)], env=env, capture_output=True, text=True,
+                          timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return [json.loads(line) for line in done.stdout.splitlines()]
+
+
 @pytest.fixture(scope='module')
 def so101_move_group(start_node: Callable[..., NodeProcess], moveit_msgs_env: dict[str, str],
                      tmp_path_factory: pytest.TempPathFactory) -> Iterator[NodeProcess]:
-    """Run the node as move_group for the SO-101 from its URDF (parameters from a file)."""
-    params = tmp_path_factory.mktemp('so101') / 'params.yaml'
-    params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
-        'robot_description': SO101.urdf.read_text(encoding='utf-8'),
-        'base_link': SO101.base_link, 'tip_link': SO101.tip_link,
-        'moveit_interfaces': True, 'angular_velocity': 1.0}}}), encoding='utf-8')
-    node = start_node('-r', f'__ns:={NS}_so101', '-r', '__node:=move_group', '--params-file',
-                      str(params), ready=False, env=moveit_msgs_env)
-    node.wait_for(r'move_group\]: ready: ')
+    node = urdf_move_group(start_node, moveit_msgs_env, tmp_path_factory.mktemp('so101'),
+                           SO101, f'{NS}_so101')
     yield node
     assert node.stop() == 0, node.output
 
 
 def test_pymoveit2_picks_from_above_with_the_so101(so101_move_group, moveit_msgs_env) -> None:
     arm = ArmModel.from_urdf(SO101.urdf, SO101.base_link, SO101.tip_link)
-    q = np.array([0.3, 0.5, 0.4, 0.9, -0.2])
-    goal = arm.frames(q[None])[0, -1]
-    spec = {'namespace': f'{NS}_so101', 'joints': list(arm.joint_names),
-            'base': SO101.base_link, 'tip': SO101.tip_link, 'start': [0.0] * 5, 'goals': [
-                {'position': goal[:3, 3].tolist(),
-                 'quat_xyzw': quaternions(goal[None, :3, :3])[0].tolist(),
-                 'tolerance_orientation': [0.01, 0.01, math.pi]}]}
-    done = subprocess.run([sys.executable, str(CLIENT.with_name('pymoveit2_client.py')),
-                           json.dumps(spec)], env=moveit_msgs_env,
-                          capture_output=True, text=True, timeout=180)
-    assert done.returncode == 0, done.stderr[-3000:]
-    answer = json.loads(done.stdout)
+    goal = arm.frames(np.array([[0.3, 0.5, 0.4, 0.9, -0.2]]))[0, -1]
+    answer, = pymoveit2_plans(SO101, f'{NS}_so101', moveit_msgs_env, [
+        {'position': goal[:3, 3].tolist(),
+         'quat_xyzw': quaternions(goal[None, :3, :3])[0].tolist(),
+         'tolerance_orientation': [0.01, 0.01, math.pi]}])
     assert answer is not None, so101_move_group.output
     frame = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
     assert np.linalg.norm(frame[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
     assert float((frame[:3, :3] @ arm.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9
+
+
+def test_pymoveit2_plans_full_poses_for_the_panda(start_node, moveit_msgs_env,
+                                                  tmp_path) -> None:
+    node = urdf_move_group(start_node, moveit_msgs_env, tmp_path, PANDA, f'{NS}_panda')
+    arm = ArmModel.from_urdf(PANDA.urdf, PANDA.base_link, PANDA.tip_link)
+    rng = np.random.default_rng(49)
+    frames = arm.frames(rng.uniform(arm.lower, arm.upper, size=(3, arm.n_joints)))[:, -1]
+    answers = pymoveit2_plans(PANDA, f'{NS}_panda', moveit_msgs_env, [
+        {'position': f[:3, 3].tolist(), 'quat_xyzw': quaternions(f[None, :3, :3])[0].tolist()}
+        for f in frames])                                   # pymoveit2's 1 mm and 0.001 rad
+    assert node.stop() == 0, node.output
+    for goal, answer in zip(frames, answers):
+        assert answer is not None, node.output
+        end = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
+        assert np.linalg.norm(end[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
+        turn = (np.trace(goal[:3, :3].T @ end[:3, :3]) - 1) / 2
+        assert turn >= math.cos(0.001) - 1e-9
 
 
 def test_the_bench_measures_round_trips_beside_the_plan(moveit_msgs_env) -> None:
