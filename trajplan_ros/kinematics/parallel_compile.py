@@ -12,7 +12,7 @@ and signature keeps the two from compiling one twice: whoever takes it compiles,
 waits and loads the result from the cache, or in the helper's case goes on to the next one.
 The warm-up stops the helper when it is done; the helper also ends when its parent does.
 
-Without a cache folder, file locks or the list, the warm-up compiles alone, as before.
+Without a cache folder, file locks or the list, the warm-up compiles alone.
 ``python -m trajplan_ros.tools.kernel_order`` records the list anew (on an empty cache of its
 own, about a minute); ``test_kernels`` checks that a first plan's kernels are in it.
 """

@@ -441,7 +441,7 @@ class PlannerNode(Node):
                   stamp=(stamp.sec, stamp.nanosec), frame=request.goal.header.frame_id,
                   orientation=_quaternion(request.goal.pose), plan_only=plan_only)
         response.plan = Path(header=self._header(s.base_frame))
-        outcome = await self.queue_call(job, request_problem(request, s))
+        outcome = await self._queue_call(job, request_problem(request, s))
         if outcome is not None and outcome.path is not None:
             response.plan = outcome.path
         return response
@@ -532,7 +532,7 @@ class PlannerNode(Node):
             problem = None
         except moveit.Refusal as exc:
             job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
-        outcome = await self.queue_call(job, problem and str(problem))
+        outcome = await self._queue_call(job, problem and str(problem))
         code = ((problem.code, str(problem)) if problem else
                 moveit.error_code(outcome, job))
         moveit.fill_response(response.motion_plan_response, outcome, code, s, asked.group_name,
@@ -545,7 +545,7 @@ class PlannerNode(Node):
             self.get_logger().info(f'plan_kinematic_path: {field} is ignored (one planner: '
                                    'this one); said once')
 
-    async def queue_call(self, job: Job, problem: str | None = None) -> jobs.Outcome | None:
+    async def _queue_call(self, job: Job, problem: str | None = None) -> jobs.Outcome | None:
         """
         Plan a service call's ``job`` in turn and return its outcome (None: not planned).
 
