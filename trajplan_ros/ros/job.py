@@ -9,7 +9,8 @@ Pure translation between the planning core and ROS messages, no node: the worker
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+import math
+from typing import Callable, Sequence
 
 from nav_msgs.msg import Path
 import numpy as np
@@ -23,7 +24,7 @@ from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
-__all__ = ['Outcome', 'describe_arm', 'run']
+__all__ = ['Outcome', 'describe_arm', 'frame_problem', 'rotation_problem', 'run']
 
 
 def describe_arm(settings: Settings) -> str:
@@ -60,6 +61,23 @@ class Outcome:
 def _refusal(where: str, result: PlanResult, took: str) -> str:
     optimised = f'; {took}' if result.joint_goal is not None else ''
     return f'{where}: {result.status.value}: {result.message}{optimised}'
+
+
+def frame_problem(frame: str, settings: Settings) -> str | None:
+    """Return why a goal in ``frame`` cannot be posed (not a link of the URDF), or None."""
+    if frame and frame != settings.base_frame:
+        try:
+            settings.frames.check(frame)
+        except ValueError as exc:
+            return str(exc)
+    return None
+
+
+def rotation_problem(orientation: Sequence[float]) -> str | None:
+    """Return why a quaternion (x, y, z, w) is not a rotation, or None."""
+    if all(map(math.isfinite, orientation)) and any(orientation):
+        return None
+    return f'the goal orientation {list(orientation)} is not a rotation (x, y, z, w)'
 
 
 def goal_orientation(job: Job, settings: Settings) -> str:

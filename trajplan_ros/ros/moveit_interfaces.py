@@ -29,7 +29,7 @@ from defusedxml import ElementTree
 import numpy as np
 from trajplan_ros.planning import Mode, PlanStatus
 from trajplan_ros.ros.execution import Motion
-from trajplan_ros.ros.job import Outcome
+from trajplan_ros.ros.job import frame_problem, Outcome, rotation_problem
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import trajectory_msg
 from trajplan_ros.ros.settings import Settings
@@ -127,7 +127,7 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
     changes: dict[str, Any] = {'mode': Mode.FREE}
     if goal.orientation_constraints:
         _orient(job, changes, goal.orientation_constraints[0], frame, s)
-    _check_offset(position, job, s)
+    _check_offset(position, s)
     scale = {f'{kind}_scaling': factor for kind, factor in (
         ('velocity', request.max_velocity_scaling_factor),
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
@@ -173,11 +173,9 @@ def _check_link(link: str, settings: Settings) -> None:
 
 
 def _frame(frame: str, settings: Settings) -> str:
-    if frame and frame != settings.base_frame:
-        try:
-            settings.frames.check(frame)
-        except ValueError as exc:
-            raise Refusal('FRAME_TRANSFORM_FAILURE', str(exc)) from None
+    problem = frame_problem(frame, settings)
+    if problem:
+        raise Refusal('FRAME_TRANSFORM_FAILURE', problem)
     return frame
 
 
@@ -219,8 +217,9 @@ def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
                                                   'are in different frames')
     o = constraint.orientation
     q = (o.x, o.y, o.z, o.w)
-    if not (all(map(math.isfinite, q)) and any(q)):
-        raise Refusal('INVALID_GOAL_CONSTRAINTS', f'orientation {list(q)} is not a rotation')
+    problem = rotation_problem(q)
+    if problem:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
     tol = [constraint.absolute_x_axis_tolerance, constraint.absolute_y_axis_tolerance,
            constraint.absolute_z_axis_tolerance]
     if not all(math.isfinite(t) and t > 0.0 for t in tol):
@@ -241,7 +240,7 @@ def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
                                                   'offered; free about z, it is an approach goal')
 
 
-def _check_offset(position: Any, job: Job, settings: Settings) -> None:
+def _check_offset(position: Any, settings: Settings) -> None:
     """Refuse a target_point_offset that is not the node's tool point."""
     o = position.target_point_offset
     offset = np.array([o.x, o.y, o.z])

@@ -165,15 +165,10 @@ def request_problem(request: GetPlan.Request, settings: Settings) -> str | None:
 def goal_problem(frame: str, orientation: tuple[float, ...] | None,
                  settings: Settings) -> str | None:
     """Return why a goal in ``frame`` (a pose's ``orientation``) cannot be planned, or None."""
-    if frame and frame != settings.base_frame:
-        try:
-            settings.frames.check(frame)
-        except ValueError as exc:
-            return str(exc)
-    if (settings.goal_orientation != 'ignore' and orientation is not None
-            and not (all(map(math.isfinite, orientation)) and any(orientation))):
-        return f'the goal orientation {list(orientation)} is not a rotation (x, y, z, w)'
-    return None
+    problem = jobs.frame_problem(frame, settings)
+    if problem is None and settings.goal_orientation != 'ignore' and orientation is not None:
+        problem = jobs.rotation_problem(orientation)
+    return problem
 
 
 def _quaternion(pose: Pose) -> tuple[float, float, float, float]:
@@ -281,9 +276,15 @@ class PlannerNode(Node):
 
     def _use_execution(self, settings: Settings) -> None:
         """Create the action client the first time execution is action (ValueError: no way)."""
-        if settings.execution == 'action' and self._execution is None:
+        if settings.execution == 'action':
+            self._action_execution()
+
+    def _action_execution(self) -> ActionExecution:
+        """Return the execution through the controller's action, made the first time."""
+        if self._execution is None:
             self._execution = ActionExecution(self, self._report_execution,
                                               self._states.measured)
+        return self._execution
 
     def _on_description(self, msg: String) -> None:
         """
@@ -485,10 +486,7 @@ class PlannerNode(Node):
         key = bytes(goal.goal_id.uuid)
         self._moveit_executions[key] = (job, done)
         goal.publish_feedback(self._execute_type.Feedback(state='MONITOR'))
-        if self._execution is None:
-            self._execution = ActionExecution(self, self._report_execution,
-                                              self._states.measured)
-        self._execution.submit(motion)
+        self._action_execution().submit(motion)
         if goal.is_cancel_requested:               # asked before it was registered
             self._execution.cancel(job)
         status, message = await done
