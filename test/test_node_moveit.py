@@ -201,7 +201,8 @@ def urdf_move_group(start_node: Callable[..., NodeProcess], env: dict[str, str],
     params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
         'robot_description': published.urdf.read_text(encoding='utf-8'),
         'base_link': published.base_link, 'tip_link': published.tip_link,
-        'moveit_interfaces': True, 'angular_velocity': 1.0}}}), encoding='utf-8')
+        'moveit_interfaces': True, 'angular_velocity': 1.0,
+        'min_planning_time': 60.0}}}), encoding='utf-8')      # pymoveit2 allows 0.5 s
     node = start_node('-r', f'__ns:={namespace}', '-r', '__node:=move_group', '--params-file',
                       str(params), ready=False, env=env)
     node.wait_for(r'move_group\]: ready: ')
@@ -254,6 +255,8 @@ def test_pymoveit2_plans_full_poses_for_the_panda(start_node, moveit_msgs_env,
         {'position': f[:3, 3].tolist(), 'quat_xyzw': quaternions(f[None, :3, :3])[0].tolist()}
         for f in frames])                                   # pymoveit2's 1 mm and 0.001 rad
     assert node.stop() == 0, node.output
+    assert node.has('plan_kinematic_path: allowed_planning_time is raised to '
+                    'min_planning_time; said once')
     for goal, answer in zip(frames, answers):
         assert answer is not None, node.output
         end = arm.frames(np.array([answer['positions'][-1]]))[0, -1]

@@ -87,7 +87,8 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
     Return the job of a MotionPlanRequest (Refusal: why and with which code it is refused).
 
     ``srdf``: the semantic description in use (its groups name the group); ``ignored`` is told
-    each of MoveIt's planner-choosing fields that is set (``IGNORED``).
+    each of MoveIt's planner-choosing fields that is set (``IGNORED``), and
+    ``allowed_planning_time`` where ``min_planning_time`` raises it.
     """
     s = settings
     groups = srdf_groups(srdf)
@@ -133,8 +134,13 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
     if scale:                                 # MoveIt's rule: any other factor means 1
         changes['motion'] = dataclasses.replace(s.request.motion, **scale)
-    if 0.0 < request.allowed_planning_time < math.inf:
-        changes['max_planning_time'] = float(request.allowed_planning_time)
+    budget = request.allowed_planning_time
+    if not 0.0 < budget < math.inf:
+        budget = s.request.max_planning_time
+    if budget < s.min_planning_time:
+        ignored('allowed_planning_time')
+        budget = s.min_planning_time
+    changes['max_planning_time'] = float(budget)
     job.request_changes = changes
     return job
 

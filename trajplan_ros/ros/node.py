@@ -540,8 +540,9 @@ class PlannerNode(Node):
     def _say_ignored(self, field: str) -> None:
         if field not in self._moveit_ignored:
             self._moveit_ignored.add(field)
-            self.get_logger().info(f'plan_kinematic_path: {field} is ignored (one planner: '
-                                   'this one); said once')
+            why = ('raised to min_planning_time' if field == 'allowed_planning_time' else
+                   'ignored (one planner: this one)')
+            self.get_logger().info(f'plan_kinematic_path: {field} is {why}; said once')
 
     async def _queue_call(self, job: Job, problem: str | None = None) -> jobs.Outcome | None:
         """

@@ -206,6 +206,10 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec('max_queued_calls', 1000,
                   'most service calls that may wait for a plan; more are answered at once with '
                   'an empty plan', bounds=(1, 100000)),
+    ParameterSpec('min_planning_time', 0.0,
+                  "plan_kinematic_path: least search time a MoveIt request gets, s; a shorter "
+                  'allowed_planning_time is raised to it (said once); 0: as asked',
+                  bounds=(0.0, 600.0)),
     ParameterSpec('moveit_interfaces', False,
                   "serve move_group's plan_kinematic_path (moveit_msgs/srv/GetMotionPlan) for "
                   'MoveIt clients; needs moveit_msgs (read at start-up)'),
@@ -243,6 +247,8 @@ class Settings:
     start_tolerance: float = 0.05
     #: execution action: how long the controller may take, s.
     controller_timeout: float = 5.0
+    #: plan_kinematic_path: the least search time a MoveIt request gets, s (0: as asked).
+    min_planning_time: float = 0.0
 
     @property
     def arm(self) -> ArmModel:
@@ -319,6 +325,7 @@ class Settings:
                    controller_action=values['controller_action'],
                    start_tolerance=values['start_tolerance'],
                    controller_timeout=values['controller_timeout'],
+                   min_planning_time=values['min_planning_time'],
                    diagnostic_period=values['diagnostic_updater.period'])
 
 
