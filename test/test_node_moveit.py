@@ -114,16 +114,32 @@ def test_codes_say_why_a_goal_is_not_planned(move_group) -> None:
         assert answer['code'] == code, (code, answer)
         assert answer['message'] and answer['source'] == 'trajplan_ros', answer
         assert answer['positions'] == []                          # nothing half-made
-    joint, rotated = ask(move_group, {'position': REACHABLE, 'joint_goal': True},
-                         {'position': REACHABLE, 'orientation': [0.0, 0.0, 0.0, 1.0],
-                          'tolerances': [math.pi, 0.1, 0.1]})
-    assert joint['code'] == rotated['code'] == 'INVALID_GOAL_CONSTRAINTS'
-    assert 'joint goals are not offered' in joint['message']
+    mixed, foreign, beyond, rotated = ask(
+        move_group, {'position': REACHABLE, 'joint_goal': {'joint1': 0.3}},
+        {'joint_goal': {'finger': 0.01}}, {'joint_goal': {'joint1': 5.0}},
+        {'position': REACHABLE, 'orientation': [0.0, 0.0, 0.0, 1.0],
+         'tolerances': [math.pi, 0.1, 0.1]})
+    assert {mixed['code'], foreign['code'], beyond['code'], rotated['code']} == {
+        'INVALID_GOAL_CONSTRAINTS'}
+    assert 'joint constraints beside a position or orientation' in mixed['message']
+    assert "joint constraint on 'finger': this node plans the chain joint1" in foreign['message']
+    assert beyond['message'].startswith('joint goal joint1 = 5 rad is outside its limits')
     assert 'free about the x or y axis' in rotated['message']
     assert node.has('planner_id is ignored')
     assert node.proc.poll() is None                               # still serving
     again, = ask(move_group, {'position': REACHABLE})
     assert again['code'] == 'SUCCESS'
+
+
+def test_a_joint_goal_moves_the_joints_it_names_there_and_keeps_the_others(move_group) -> None:
+    start = {'joint1': 0.2, 'joint2': -0.1, 'joint3': 0.0, 'joint4': 0.4, 'joint5': 0.0}
+    answer, = ask(move_group, {'joint_goal': {'joint1': -0.5, 'joint3': 0.7, 'joint5': 0.3},
+                               'start': start})
+    assert answer['code'] == 'SUCCESS', answer
+    assert answer['message'].startswith('reached the joint goal in 0.7000 s')     # 1 rad/s
+    assert answer['positions'][0] == list(start.values())
+    assert answer['positions'][-1] == [-0.5, -0.1, 0.7, 0.4, 0.3]
+    assert answer['times'][-1] == pytest.approx(0.7)
 
 
 def test_a_five_joint_arm_asked_a_pose_it_cannot_take_says_how_far(move_group) -> None:
@@ -235,11 +251,14 @@ def so101_move_group(start_node: Callable[..., NodeProcess], moveit_msgs_env: di
 def test_pymoveit2_picks_from_above_with_the_so101(so101_move_group, moveit_msgs_env) -> None:
     arm = ArmModel.from_urdf(SO101.urdf, SO101.base_link, SO101.tip_link)
     goal = arm.frames(np.array([[0.3, 0.5, 0.4, 0.9, -0.2]]))[0, -1]
-    answer, = pymoveit2_plans(SO101, f'{NS}_so101', moveit_msgs_env, [
+    joints = np.clip([-0.6, 0.3, 0.5, -0.4, 1.0], arm.lower, arm.upper).tolist()
+    answer, configured = pymoveit2_plans(SO101, f'{NS}_so101', moveit_msgs_env, [
         {'position': goal[:3, 3].tolist(),
          'quat_xyzw': quaternions(goal[None, :3, :3])[0].tolist(),
-         'tolerance_orientation': [0.01, 0.01, math.pi]}])
-    assert answer is not None, so101_move_group.output
+         'tolerance_orientation': [0.01, 0.01, math.pi]},
+        {'joint_positions': joints}])                           # move_to_configuration's
+    assert answer is not None and configured is not None, so101_move_group.output
+    assert configured['positions'][-1] == joints
     frame = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
     assert np.linalg.norm(frame[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
     assert float((frame[:3, :3] @ arm.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9

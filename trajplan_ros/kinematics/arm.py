@@ -386,6 +386,16 @@ class ArmModel:
         object.__setattr__(held, '_chain', held._chain._replace(planned=planned))
         return held
 
+    def every_joint_planned(self) -> ArmModel:
+        """Return the arm with every joint planned (a joint goal moves the held ones too)."""
+        if self.planned == self.n_joints:
+            return self
+        return ArmModel(self.rotations, self.translations, base=self.base,
+                        tool_point=self.tool_point, tool_axis=self.tool_axis, sign=self.sign,
+                        offset=self.offset, lower=self.lower, upper=self.upper,
+                        velocity=self.velocity, joint_names=self.joint_names,
+                        base_link=self.base_link, tip_link=self.tip_link)
+
     def speeds(self, omega: float) -> np.ndarray:
         """Return each joint's angular velocity (rad/s) at servo velocity omega."""
         return np.minimum(float(omega), self.velocity)

@@ -28,7 +28,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from trajplan_ros.collision.distances import ArmCollision, CollisionWorld
-from trajplan_ros.collision.free_motion import Clearance
+from trajplan_ros.collision.free_motion import check_motion, Clearance, StartLimits
 from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import Shape
 from trajplan_ros.kinematics import ArmModel, paper_arm
@@ -193,6 +193,8 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     clock, interrupt = time.perf_counter(), _interrupt(r.max_planning_time, stop)
     common = {'goal': r.goal, 'algorithm': r.algorithm, 'mode': r.mode.value,
               'angular_velocity': float(r.angular_velocity), 'motion': r.motion}
+    if r.joint_goal is not None:
+        return _to_joint_goal(r, clock, interrupt, common)
     try:
         start = r.start if r.start is not None else np.zeros(arm.n_joints)    # upright: q = 0
         obj = Objective(arm, r.goal, start, mode=r.mode, omega=r.angular_velocity,
@@ -256,6 +258,94 @@ def _fastest_within(obj: Objective, found: OptimizeResult, r: PlanRequest) -> Op
     ev = obj(x[None])
     return replace(found, x=x, fun=float(ev.efficiency[0]), motion_time=float(ev.motion_time[0]),
                    error=float(ev.error[0]))
+
+
+def _to_joint_goal(r: PlanRequest, clock: float, interrupt: Interrupt | None,
+                   common: dict[str, Any]) -> PlanResult:
+    """
+    Plan the motion to the request's joint goal, every joint moving (no search).
+
+    Direct where it is free; else, with ``detours``, the fastest free motion found through via
+    points to that same joint goal (``search.detour``), else NOT_REACHED. A goal outside the
+    limits, or whose pose collides, is REJECTED with the reason.
+    """
+    arm = r.planned_arm.every_joint_planned()
+    try:
+        start = r.start if r.start is not None else np.zeros(arm.n_joints)
+        q = _checked_joint_goal(r.planned_arm, r.joint_goal, start)
+        tip = arm.frames(q[None])[0, -1]
+        obj = Objective(arm, arm.tool(q[None])[0][0], start, mode=Mode.POSE,
+                        omega=r.angular_velocity, profile=r.motion,
+                        orientation=quaternions(tip[None, :3, :3])[0],
+                        start_margin=r.start_limit_margin)
+        common.update(goal=obj.goal, joint_names=tuple(arm.joint_names),
+                      law=r.motion.time_law(arm, r.angular_velocity))
+    except InvalidRequest as exc:
+        return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
+    duration = float(obj.motion_time(q[None])[0])
+    result = PlanResult(PlanStatus.SUCCEEDED, f'reached the joint goal in {duration:.4f} s of '
+                        'motion', start=obj.start.copy(), joint_goal=q, position_error_m=0.0,
+                        motion_time_s=duration, efficiency=float(obj(q[None]).efficiency[0]),
+                        **common)
+    if r.world is not None:
+        _joint_goal_clear(result, obj, r, interrupt)
+    result.plan_time_s = time.perf_counter() - clock
+    return result
+
+
+def _checked_joint_goal(arm: ArmModel, joint_goal: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """
+    Return a joint goal as every joint's angle (InvalidRequest: why it cannot be one).
+
+    Given the planned joints only, the held ones keep their ``start``.
+    """
+    try:
+        q = arm.full_start(joint_goal)
+    except ValueError as exc:
+        raise InvalidRequest(str(exc).replace('a start', 'a joint goal')) from None
+    if joint_goal.size < arm.n_joints:
+        q[joint_goal.size:] = arm.full_start(start)[joint_goal.size:]
+    if not np.all(np.isfinite(q)):
+        raise InvalidRequest(f'joint goal has a non-finite angle: {q.tolist()}')
+    outside = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))
+    if outside.size:
+        i = int(outside[0])
+        raise InvalidRequest(f'joint goal {arm.joint_names[i]} = {q[i]:.6g} rad is outside its '
+                             f'limits [{arm.lower[i]:.4f}, {arm.upper[i]:.4f}]')
+    return q
+
+
+def _joint_goal_clear(result: PlanResult, obj: Objective, r: PlanRequest,
+                      interrupt: Interrupt | None) -> None:
+    """
+    Keep a joint-goal plan whose motion is free, else route it around or say why not.
+
+    A goal whose own pose collides is REJECTED, the pair in ``clearance_pair``.
+    """
+    world, q = r.world, result.joint_goal
+    limits = StartLimits.at(world, obj.start)
+    there = check_motion(world, q, q, result.law, r.motion.timing, True, limits)
+    if not there.free:
+        result.status, result.clearance_pair = PlanStatus.REJECTED, there.pair
+        result.clearance_m = there.clearance
+        result.message = f'the joint goal is in collision: {there.pair}'
+        return
+    clear = check_motion(world, obj.start, q, result.law, r.motion.timing, True, limits)
+    if clear.free:
+        _moved(result, obj, q, result.motion_time_s, result.efficiency, clear)
+        return
+    rng = r.seed if isinstance(r.seed, np.random.Generator) else np.random.default_rng(r.seed)
+    around = (detour(obj, world, result.law, r.motion.timing, q[None], rng, r.tolerance,
+                     interrupt, more_goals=False) if r.detours else None)
+    if around is not None:
+        _moved(result, obj, around.x, around.duration, np.nan if around.vias else
+               result.efficiency, around.clearance, around.vias)
+        return
+    result.status = PlanStatus.NOT_REACHED
+    result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
+    result.message = f'the direct motion to the joint goal collides: {clear.pair}{_start_note(clear)}'
+    if r.detours:
+        result.message += '; no free motion through a via point found either'
 
 
 def _check_world(world: CollisionWorld | None, goal: np.ndarray) -> None:

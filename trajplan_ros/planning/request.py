@@ -77,6 +77,10 @@ class PlanRequest:
         not be a unit vector); the default (0, 0, -1) is a grasp from above.
     :param orientation: pose mode: the tool (tip) frame's orientation in the base frame, a
         unit quaternion (x, y, z, w).
+    :param joint_goal: a joint goal instead: every joint's angle (rad), or the planned ones
+        (the others keep their start); the plan is the motion there, direct or, with a
+        ``world`` and ``detours``, through via points. ``goal`` is then not read (give ()),
+        nor the mode's orientation settings.
     :param motion: the motion's profile, timing and limits; the plan minimises its duration.
     :param angular_velocity: the servo angular velocity omega of eq. (10), rad/s; it caps every
         joint's velocity.
@@ -111,6 +115,7 @@ class PlanRequest:
     mode: Mode | str = Mode.FREE
     approach: Sequence[float] = TOP_DOWN
     orientation: Sequence[float] | None = None
+    joint_goal: Sequence[float] | None = None
     motion: MotionProfile = field(default_factory=MotionProfile)
     angular_velocity: float = DEFAULT_OMEGA
     world: CollisionWorld | None = None
@@ -131,8 +136,9 @@ class PlanRequest:
     def __post_init__(self) -> None:
         """Hold the goal as floats (ValueError if it is not numbers) and the mode as a Mode."""
         object.__setattr__(self, 'goal', np.asarray(self.goal, dtype=float).ravel())
-        if self.start is not None:
-            object.__setattr__(self, 'start', np.asarray(self.start, dtype=float).ravel())
+        for name in ('start', 'joint_goal'):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float).ravel())
         if self.mode not in tuple(Mode) + tuple(m.value for m in Mode):
             raise ValueError(f"mode must be one of {', '.join(m.value for m in Mode)}, "
                              f'got {self.mode!r}')

@@ -127,12 +127,21 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     moved = f" (in '{job.frame}': {describe_goal(job.goal)} m)" if job.frame not in (
         '', s.base_frame) else ''
     job.goal = tuple(goal.tolist())
-    where = (f'{job.label} {describe_goal(job.goal)} m{moved} from q = '
-             f'{describe_goal(start.q)} rad{start.describe()}')
     request = s.request.replace(goal=job.goal, start=start.q,
                                 tolerance=job.tolerance or s.request.tolerance,
                                 **job.request_changes)
+    if job.joint_goal:
+        q = start.q.copy()
+        for name, angle in job.joint_goal.items():
+            q[s.arm.joint_names.index(name)] = angle
+        request = request.replace(joint_goal=q)
+        what = f'{job.label} to joint goal {describe_goal(q)} rad'
+    else:
+        what = f'{job.label} {describe_goal(job.goal)} m{moved}'
+    where = f'{what} from q = {describe_goal(start.q)} rad{start.describe()}'
     result = plan(_pointed(request, rotation, goal_orientation(job, s)), stop=stop)
+    if job.joint_goal and result.joint_goal is not None:
+        job.goal = tuple(result.goal.tolist())           # the tool point there, for the log
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None

@@ -48,6 +48,8 @@ class Job:
     #: tolerances, time budget and scaling)
     request_changes: Mapping[str, Any] = field(default_factory=dict)
     start_state: Mapping[str, float] = field(default_factory=dict)   # joint angles it gives
+    #: a joint goal instead of ``goal``: angles by joint name (the others keep their start)
+    joint_goal: Mapping[str, float] = field(default_factory=dict)
     answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)
     ended: tuple[str, str] = ('', '')        # its first outcome on plan_results: status, reason
     queued_at: float = field(default_factory=time.monotonic)

@@ -14,9 +14,10 @@ or a box's inscribed sphere) is the position tolerance, and the plan is the leas
 into it, not to its centre (``search.region``). An OrientationConstraint beside it makes the
 goal a pose (its least tolerance the orientation tolerance), or, with the z tolerance pi or
 more, an approach goal (the tool's z axis within the lesser of the x and y tolerances of the
-orientation's z axis); all three pi or more: position only. What a direct motion cannot
-promise (path constraints, visibility constraints, joint goals, several goal regions) is
-refused with the reason, never ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how
+orientation's z axis); all three pi or more: position only. A goal of JointConstraints is a
+joint goal: the motion to those angles (``PlanRequest.joint_goal``). What a direct motion
+cannot promise (path constraints, visibility constraints, several goal regions) is refused
+with the reason, never ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how
 to get it.
 """
 from __future__ import annotations
@@ -109,26 +110,12 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
     goal = request.goal_constraints[0]
     if goal.visibility_constraints:
         raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
-    if goal.joint_constraints:
-        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'joint goals are not offered yet: give the '
-                                                  'tip link a position (and orientation)')
-    if len(goal.position_constraints) != 1 or len(goal.orientation_constraints) > 1:
-        raise Refusal('INVALID_GOAL_CONSTRAINTS',
-                      f'{len(goal.position_constraints)} position and '
-                      f'{len(goal.orientation_constraints)} orientation constraints given: one '
-                      'position constraint is planned, with at most one orientation constraint')
     start = _start_state(request.start_state, s)
-    position = goal.position_constraints[0]
-    _check_link(position.link_name, s)
-    frame = _frame(position.header.frame_id, s)
-    centre, radius = _region(position)
-    job = Job(label, tuple(centre.tolist()), tolerance=radius, future=future, frame=frame,
-              plan_only=True, start_state=start, answer_path=False)
-    job.goal_orientation = 'ignore'
-    changes: dict[str, Any] = {'mode': Mode.FREE}
-    if goal.orientation_constraints:
-        _orient(job, changes, goal.orientation_constraints[0], frame, s)
-    _check_offset(position, s)
+    if goal.joint_constraints:
+        job = _joint_goal_job(label, goal, s, future, start)
+        changes: dict[str, Any] = {'mode': Mode.POSE}           # every joint moves
+    else:
+        job, changes = _tip_goal_job(label, goal, s, future, start)
     scale = {f'{kind}_scaling': factor for kind, factor in (
         ('velocity', request.max_velocity_scaling_factor),
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
@@ -142,6 +129,63 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
         budget = s.min_planning_time
     changes['max_planning_time'] = float(budget)
     job.request_changes = changes
+    return job
+
+
+def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,
+                  start: dict[str, float]) -> tuple[Job, dict[str, Any]]:
+    """Return the job of a position (and orientation) goal on the tip, and its changes."""
+    if len(goal.position_constraints) != 1 or len(goal.orientation_constraints) > 1:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS',
+                      f'{len(goal.position_constraints)} position and '
+                      f'{len(goal.orientation_constraints)} orientation constraints given: one '
+                      'position constraint is planned, with at most one orientation constraint')
+    position = goal.position_constraints[0]
+    _check_link(position.link_name, settings)
+    frame = _frame(position.header.frame_id, settings)
+    centre, radius = _region(position)
+    job = Job(label, tuple(centre.tolist()), tolerance=radius, future=future, frame=frame,
+              plan_only=True, start_state=start, answer_path=False)
+    job.goal_orientation = 'ignore'
+    changes: dict[str, Any] = {'mode': Mode.FREE}
+    if goal.orientation_constraints:
+        _orient(job, changes, goal.orientation_constraints[0], frame, settings)
+    _check_offset(position, settings)
+    return job, changes
+
+
+def _joint_goal_job(label: str, goal: Any, settings: Settings, future: Any,
+                    start: dict[str, float]) -> Job:
+    """
+    Return the job of a goal of JointConstraints: the chain's joints they name, at their position.
+
+    A position beyond a limit by no more than its tolerance is taken at the limit; joints not
+    named keep their start.
+    """
+    if goal.position_constraints or goal.orientation_constraints:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'joint constraints beside a position or '
+                                                  'orientation constraint: give one kind')
+    arm = settings.arm
+    angles = {}
+    for c in goal.joint_constraints:
+        if c.joint_name not in arm.joint_names:
+            raise Refusal('INVALID_GOAL_CONSTRAINTS', f"joint constraint on '{c.joint_name}': "
+                                                      'this node plans the chain '
+                                                      f"{', '.join(arm.joint_names)}")
+        i = arm.joint_names.index(c.joint_name)
+        values = (c.position, c.tolerance_above, c.tolerance_below)
+        if not (all(map(math.isfinite, values)) and min(values[1:]) >= 0.0):
+            raise Refusal('INVALID_GOAL_CONSTRAINTS', f'joint constraint on {c.joint_name}: '
+                                                      f'position {c.position}, tolerances '
+                                                      f'{c.tolerance_above}, {c.tolerance_below}')
+        low, high = arm.lower[i], arm.upper[i]
+        q = c.position
+        if low - c.tolerance_below <= q <= high + c.tolerance_above:
+            q = min(max(q, low), high)
+        angles[c.joint_name] = float(q)
+    job = Job(label, (math.nan,) * 3, future=future, plan_only=True, start_state=start,
+              answer_path=False)
+    job.joint_goal = angles
     return job
 
 
@@ -278,7 +322,8 @@ def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
     if status is PlanStatus.CANCELLED:
         return 'PREEMPTED', outcome.reason
     if status is PlanStatus.REJECTED:
-        inside = 'inside obstacle' in outcome.reason       # planner._check_world's words
+        inside = ('inside obstacle' in outcome.reason      # planner._check_world's words
+                  or bool(result.clearance_pair))          # a joint goal's pose collides
         return ('GOAL_IN_COLLISION' if inside else 'INVALID_GOAL_CONSTRAINTS'), outcome.reason
     if status is PlanStatus.NOT_REACHED:
         if result.clearance_pair:                   # reached, but every motion collides

@@ -63,17 +63,18 @@ class Detour:
 
 def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
            goals: np.ndarray, rng: np.random.Generator, tolerance: float,
-           stop: Callable[[], object] | None = None) -> Detour | None:
+           stop: Callable[[], object] | None = None, more_goals: bool = True) -> Detour | None:
     """
     Return the fastest motion found from the start through via points to a joint goal, or None.
 
     ``goals`` (K, planned): the goal's reached joint solutions, fastest first; ``law``: the
     whole arm's time law; ``tolerance``: the largest error (m) of a reached goal; ``stop``:
-    asked before every check, anything but None ends the search with what it has. See the
-    module docstring.
+    asked before every check, anything but None ends the search with what it has;
+    ``more_goals``: False keeps to ``goals`` (a joint goal), never drawing other solutions.
+    See the module docstring.
     """
     check = _Checker(obj, world, law, timing, stop)
-    goals, best = _clear_goals(obj, check, goals, rng, tolerance)
+    goals, best = _clear_goals(obj, check, goals, rng, tolerance if more_goals else None)
     if not len(goals):                       # every joint goal found is itself in collision
         return None
     start = obj.planned_start
@@ -97,18 +98,18 @@ def detour(obj: Objective, world: CollisionWorld, law: TimeLaw, timing: Timing,
 
 
 def _clear_goals(obj: Objective, check: _Checker, goals: np.ndarray, rng: np.random.Generator,
-                 tolerance: float) -> tuple[np.ndarray, Detour | None]:
+                 tolerance: float | None) -> tuple[np.ndarray, Detour | None]:
     """
     Return up to ``GOALS`` joint goals whose own pose keeps the padding, fastest first.
 
     The known ones first (their direct motions collide); where fewer are clear, up to
-    ``ROUNDS`` rounds of the free-goal search's candidates (``reached_goals``): near an
-    obstacle few of the goal's solutions are. A goal drawn here may have a free direct motion:
-    the fastest found is returned too (else None).
+    ``ROUNDS`` rounds of the free-goal search's candidates (``reached_goals``, within
+    ``tolerance``; None: none drawn): near an obstacle few of the goal's solutions are. A goal
+    drawn here may have a free direct motion: the fastest found is returned too (else None).
     """
     clear = [g for g in goals if check.pose(g)][:GOALS]
     known, direct = len(clear), None
-    for _ in range(ROUNDS):
+    for _ in range(ROUNDS if tolerance is not None else 0):
         if len(clear) >= GOALS or check.spent(check.count + 1):
             break
         clear += [g for g in reached_goals(obj, rng, tolerance) if check.pose(g)]

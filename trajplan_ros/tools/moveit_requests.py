@@ -15,15 +15,20 @@ from typing import Any
 __all__ = ['motion_request']
 
 
-def motion_request(position: list[float], radius: float = 0.001, frame: str = '',
+def motion_request(position: list[float] | None = None, radius: float = 0.001, frame: str = '',
                    box: list[float] | None = None, link: str = '',
                    orientation: list[float] | None = None,
                    tolerances: tuple[float, float, float] = (0.001, 0.001, 0.001),
                    start: dict[str, float] | None = None, group: str = 'arm',
                    goals: int = 1, path_constraint: bool = False,
-                   joint_goal: bool = False, velocity_scaling: float = 0.0,
+                   joint_goal: dict[str, float] | None = None, velocity_scaling: float = 0.0,
                    planning_time: float = 5.0) -> Any:
-    """Build a request as pymoveit2's template does: a sphere (or box) and an orientation."""
+    """
+    Build a request as pymoveit2's template does: a sphere (or box) and an orientation.
+
+    ``joint_goal``: JointConstraints (0.001 rad either side), beside the region if a
+    ``position`` is given too.
+    """
     from geometry_msgs.msg import Pose
     from moveit_msgs.msg import (BoundingVolume, Constraints, JointConstraint,
                                  MotionPlanRequest, OrientationConstraint, PositionConstraint)
@@ -33,11 +38,12 @@ def motion_request(position: list[float], radius: float = 0.001, frame: str = ''
     shape = (SolidPrimitive(type=SolidPrimitive.BOX, dimensions=box) if box is not None
              else SolidPrimitive(type=SolidPrimitive.SPHERE, dimensions=[radius]))
     pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = position
+    if position is not None:
+        pose.position.x, pose.position.y, pose.position.z = position
     region.primitives, region.primitive_poses = [shape], [pose]
     where = PositionConstraint(link_name=link, constraint_region=region, weight=1.0)
     where.header.frame_id = frame
-    goal = Constraints(position_constraints=[where])
+    goal = Constraints(position_constraints=[where] if position is not None else [])
     if orientation is not None:
         turn = OrientationConstraint(link_name=link, weight=1.0,
                                      absolute_x_axis_tolerance=tolerances[0],
@@ -48,7 +54,10 @@ def motion_request(position: list[float], radius: float = 0.001, frame: str = ''
         o.x, o.y, o.z, o.w = orientation
         goal.orientation_constraints = [turn]
     if joint_goal:
-        goal.joint_constraints = [JointConstraint(joint_name='joint1', position=0.3)]
+        goal.joint_constraints = [JointConstraint(joint_name=name, position=float(angle),
+                                                  tolerance_above=0.001,
+                                                  tolerance_below=0.001, weight=1.0)
+                                  for name, angle in joint_goal.items()]
     request = MotionPlanRequest(group_name=group, goal_constraints=[goal] * goals,
                                 allowed_planning_time=planning_time, planner_id='RRTConnect',
                                 max_velocity_scaling_factor=velocity_scaling,
