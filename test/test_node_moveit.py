@@ -316,12 +316,13 @@ def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> Non
     node, env = executing
     specs = [{'position': list(REACHABLE), 'execute': 'run'},
              {'position': [0.2, -0.15, 0.1], 'execute': 'cancel'},     # 1.5 rad of joint1
-             {'position': list(REACHABLE), 'execute': 'foreign'}]
+             {'position': list(REACHABLE), 'execute': 'foreign'},
+             {'joint_goal': {'joint1': 1.5}, 'execute': 'stop'}]
     done = subprocess.run([sys.executable, str(CLIENT), f'{NS}_exec/plan_kinematic_path',
                            json.dumps(specs)], env=env, capture_output=True, text=True,
                           timeout=180)
     assert done.returncode == 0, done.stderr[-3000:]
-    ran, cancelled, foreign = map(json.loads, done.stdout.splitlines())
+    ran, cancelled, foreign, stopped = map(json.loads, done.stdout.splitlines())
     assert ran['code'] == 'SUCCESS' and ran['execution']['code'] == 'SUCCESS', ran
     assert ran['execution']['status'] == 4                      # SUCCEEDED
     assert cancelled['execution']['code'] == 'PREEMPTED', cancelled
@@ -329,3 +330,26 @@ def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> Non
     assert foreign['execution']['code'] == 'INVALID_MOTION_PLAN', foreign
     assert 'executes the chain' in foreign['execution']['message']
     assert node.has(r'execute_trajectory #\d+ .*execution: executed: reached the goal')
+    assert stopped['execution']['code'] == 'PREEMPTED', stopped
+    assert stopped['execution']['status'] == 6                  # ABORTED: not a cancel
+    assert node.has('trajectory_execution_event stop: 1 executions cancelled')
+
+
+def test_move_action_plans_then_executes_unless_plan_only(executing) -> None:
+    node, env = executing
+    specs = [{'position': list(REACHABLE), 'move': 'plan_only'},
+             {'position': list(REACHABLE), 'move': 'run'},
+             {'position': list(OUT_OF_REACH), 'move': 'run'}]
+    done = subprocess.run([sys.executable, str(CLIENT), f'{NS}_exec/plan_kinematic_path',
+                           json.dumps(specs)], env=env, capture_output=True, text=True,
+                          timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    planned, moved, unreachable = map(json.loads, done.stdout.splitlines())
+    assert planned['code'] == moved['code'] == 'SUCCESS', (planned, moved)
+    assert planned['status'] == moved['status'] == 4                # SUCCEEDED
+    assert planned['states'] == ['PLANNING', 'IDLE'] and planned['executed'] == 0
+    assert moved['states'] == ['PLANNING', 'MONITOR', 'IDLE']
+    assert moved['executed'] == len(moved['positions']) > 1
+    assert np.linalg.norm(tool_at(moved['positions'][-1]) - REACHABLE) <= 0.001 + 1e-9
+    assert unreachable['code'] == 'NO_IK_SOLUTION' and unreachable['status'] == 6
+    assert unreachable['positions'] == []

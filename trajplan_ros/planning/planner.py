@@ -343,7 +343,8 @@ def _joint_goal_clear(result: PlanResult, obj: Objective, r: PlanRequest,
         return
     result.status = PlanStatus.NOT_REACHED
     result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
-    result.message = f'the direct motion to the joint goal collides: {clear.pair}{_start_note(clear)}'
+    result.message = (f'the direct motion to the joint goal collides: {clear.pair}'
+                      f'{_start_note(clear)}')
     if r.detours:
         result.message += '; no free motion through a via point found either'
 

@@ -138,7 +138,8 @@ class PlanRequest:
         object.__setattr__(self, 'goal', np.asarray(self.goal, dtype=float).ravel())
         for name in ('start', 'joint_goal'):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float).ravel())
+                value = np.asarray(getattr(self, name), dtype=float).ravel()
+                object.__setattr__(self, name, value)
         if self.mode not in tuple(Mode) + tuple(m.value for m in Mode):
             raise ValueError(f"mode must be one of {', '.join(m.value for m in Mode)}, "
                              f'got {self.mode!r}')

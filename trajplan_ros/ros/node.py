@@ -15,12 +15,10 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   for ``goal_pose``). The response's plan is the tool path of the trajectory, one pose per
   point (empty on failure).
 * ``compute_plan`` (nav_msgs/srv/GetPlan): answered as ``plan_trajectory``, never published.
-* ``plan_kinematic_path`` (moveit_msgs/srv/GetMotionPlan; with ``moveit_interfaces``):
-  move_group's planning service for MoveIt's clients, answered with the joint trajectory and
-  MoveIt's error code (``ros.moveit_interfaces``); never published. ``execute_trajectory``
-  (its ExecuteTrajectory action server, where control_msgs loads): a coroutine on the executor
-  thread that hands the trajectory to ``ActionExecution`` and awaits its end, which
-  ``_report_execution`` sets.
+* With ``moveit_interfaces``: move_group's ``plan_kinematic_path``, ``execute_trajectory``,
+  ``move_action`` and ``trajectory_execution_event`` for MoveIt's clients
+  (``ros.move_group``): its plans are the node's calls, its executions go through the same
+  ``ActionExecution``.
 * Frames: a stamped goal (``goal_pose``, ``clicked_point``, the services) in any link frame
   of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
   its current joint angles (``kinematics.frames``); any other frame is refused, naming the
@@ -107,12 +105,13 @@ from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.planning import Mode, prepare
 from trajplan_ros.planning.planner import describe_goal
-from trajplan_ros.ros import job as jobs, moveit_interfaces as moveit, outcomes
+from trajplan_ros.ros import job as jobs, outcomes
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.execution import action_type, ActionExecution, Motion, resolve_action
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.messages import path_msg, trajectory_msg
+from trajplan_ros.ros.move_group import MoveGroupServer, NodeHooks
 from trajplan_ros.ros.quick_log import QuickLogger
 from trajplan_ros.ros.scene_topics import LiveScene, world_markers
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
@@ -232,11 +231,12 @@ class PlannerNode(Node):
                             callback_group=calls)
         self.create_service(GetPlan, 'compute_plan', self._on_compute_plan,
                             qos_profile=KEEP_ALL, callback_group=calls)
-        self._moveit_ignored: set[str] = set()      # MoveIt request fields said to be ignored
-        #: the ExecuteTrajectory goals executing, by goal id: their job and its end's future
-        self._moveit_executions: dict[bytes, tuple[Job, Future]] = {}
+        self._move_group: MoveGroupServer | None = None
         if self.get_parameter('moveit_interfaces').value:
-            self._offer_moveit(calls)
+            self._move_group = MoveGroupServer(self, NodeHooks(
+                lambda: self._settings, self._semantic, self._queue_call,
+                self._action_execution, self._report_execution, self._header,
+                self._call_ids), calls, KEEP_ALL)
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
@@ -369,6 +369,10 @@ class PlannerNode(Node):
         self._topic_semantic = msg.data
         self._use(settings)
 
+    def _semantic(self) -> str:
+        """Return the SRDF in use: the parameter's, else the topic's ('' if none)."""
+        return self.get_parameter('robot_description_semantic').value or self._topic_semantic
+
     def _on_collision_objects(self, msg: MarkerArray) -> None:
         """Change the scene of the next plan by markers, or refuse them all with the reason."""
         try:
@@ -446,103 +450,6 @@ class PlannerNode(Node):
         if outcome is not None and outcome.path is not None:
             response.plan = outcome.path
         return response
-
-    def _offer_moveit(self, calls: ReentrantCallbackGroup) -> None:
-        """Serve move_group's interfaces (ValueError: moveit_msgs does not load)."""
-        self._moveit_msg, moveit_srv = moveit.moveit_types()
-        self.create_service(moveit_srv.GetMotionPlan, 'plan_kinematic_path',
-                            self._on_motion_plan, qos_profile=KEEP_ALL, callback_group=calls)
-        self.create_service(moveit_srv.GetCartesianPath, 'compute_cartesian_path',
-                            self._on_cartesian_path, qos_profile=KEEP_ALL)
-        served = 'plan_kinematic_path'
-        try:
-            action_type()                                # executes through control_msgs
-        except ValueError as exc:
-            self.get_logger().warning(f'execute_trajectory not served: {exc}')
-        else:
-            from moveit_msgs.action import ExecuteTrajectory
-            from rclpy.action import ActionServer, CancelResponse
-
-            self._execute_type = ExecuteTrajectory
-            ActionServer(self, ExecuteTrajectory, 'execute_trajectory', self._on_execute,
-                         cancel_callback=self._on_execute_cancel, callback_group=calls)
-            self._cancel_accepted = CancelResponse.ACCEPT
-            served += ', execute_trajectory'
-        self.get_logger().info(f"MoveIt's interfaces ready: {served} "
-                               '(compute_cartesian_path answers that it is not offered)')
-
-    async def _on_execute(self, goal: Any) -> Any:
-        """Execute an ExecuteTrajectory goal through the controller's action; end it so."""
-        s = self._settings
-        job = Job(f'execute_trajectory #{next(self._call_ids)}', (math.nan,) * 3)
-        try:
-            motion = moveit.execution_motion(job, goal.request.trajectory.joint_trajectory, s,
-                                             resolve_action(self, s.controller_action))
-        except moveit.Refusal as exc:
-            self._report_execution(job, 'refused', str(exc))
-            goal.abort()
-            return self._execution_result(exc.code, str(exc))
-        done = Future()
-        key = bytes(goal.goal_id.uuid)
-        self._moveit_executions[key] = (job, done)
-        goal.publish_feedback(self._execute_type.Feedback(state='MONITOR'))
-        self._action_execution().submit(motion)
-        if goal.is_cancel_requested:               # asked before it was registered
-            self._execution.cancel(job)
-        status, message = await done
-        self._moveit_executions.pop(key, None)
-        name = moveit.EXECUTION_CODES.get(status, 'CONTROL_FAILED')
-        if goal.is_cancel_requested and name == 'PREEMPTED':
-            goal.canceled()
-        elif name == 'SUCCESS':
-            goal.succeed()
-        else:
-            goal.abort()
-        return self._execution_result(name, message)
-
-    def _execution_result(self, name: str, message: str) -> Any:
-        codes = self._moveit_msg.MoveItErrorCodes
-        return self._execute_type.Result(error_code=codes(
-            val=getattr(codes, name), message=message, source=moveit.SOURCE))
-
-    def _on_execute_cancel(self, goal: Any) -> Any:
-        job, _ = self._moveit_executions.get(bytes(goal.goal_id.uuid), (None, None))
-        if job is not None and self._execution is not None:
-            self._execution.cancel(job)
-        return self._cancel_accepted
-
-    def _on_cartesian_path(self, request: Any, response: Any) -> Any:
-        """Answer at once: straight-line tool paths are not what this planner plans."""
-        codes = self._moveit_msg.MoveItErrorCodes
-        response.error_code = codes(val=codes.PLANNING_FAILED, source=moveit.SOURCE,
-                                    message='straight-line tool paths are not offered: '
-                                            'plan_kinematic_path plans the least-time motion')
-        return response
-
-    async def _on_motion_plan(self, request: Any, response: Any) -> Any:
-        """Answer move_group's plan_kinematic_path (``ros.moveit_interfaces``)."""
-        s = self._settings
-        label = f'plan_kinematic_path call #{next(self._call_ids)}'
-        asked = request.motion_plan_request
-        semantic = self.get_parameter('robot_description_semantic').value or self._topic_semantic
-        try:
-            job = moveit.goal_job(label, asked, s, semantic, Future(), self._say_ignored)
-            problem = None
-        except moveit.Refusal as exc:
-            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
-        outcome = await self._queue_call(job, problem and str(problem))
-        code = ((problem.code, str(problem)) if problem else
-                moveit.error_code(outcome, job))
-        moveit.fill_response(response.motion_plan_response, outcome, code, s, asked.group_name,
-                             self._header(s.base_frame), self._moveit_msg.MoveItErrorCodes)
-        return response
-
-    def _say_ignored(self, field: str) -> None:
-        if field not in self._moveit_ignored:
-            self._moveit_ignored.add(field)
-            why = ('raised to min_planning_time' if field == 'allowed_planning_time' else
-                   'ignored (one planner: this one)')
-            self.get_logger().info(f'plan_kinematic_path: {field} is {why}; said once')
 
     async def _queue_call(self, job: Job, problem: str | None = None) -> jobs.Outcome | None:
         """
@@ -715,9 +622,8 @@ class PlannerNode(Node):
     def _report_execution(self, job: Job, status: str, message: str,
                           execution: outcomes.Execution | None = None) -> None:
         """Publish and log one execution status of ``job``; an ERROR one is a warning."""
-        for waiting_job, done in self._moveit_executions.values():
-            if waiting_job is job and status != 'accepted' and not done.done():
-                done.set_result((status, message))       # an ExecuteTrajectory goal ends
+        if self._move_group is not None:
+            self._move_group.execution_ended(job, status, message)
         msg = self._status(job, status, message, execution=execution or outcomes.Execution())
         self._results.publish(msg)
         log = self._log.warning if msg.level == DiagnosticStatus.ERROR else self._log.info

@@ -207,7 +207,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   'most service calls that may wait for a plan; more are answered at once with '
                   'an empty plan', bounds=(1, 100000)),
     ParameterSpec('min_planning_time', 0.0,
-                  "plan_kinematic_path: least search time a MoveIt request gets, s; a shorter "
+                  'plan_kinematic_path: least search time a MoveIt request gets, s; a shorter '
                   'allowed_planning_time is raised to it (said once); 0: as asked',
                   bounds=(0.0, 600.0)),
     ParameterSpec('moveit_interfaces', False,

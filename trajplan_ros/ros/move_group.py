@@ -1,0 +1,214 @@
+# Copyright 2026 The trajplan_ros Authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+move_group's interfaces on the planner node (parameter ``moveit_interfaces``).
+
+* ``plan_kinematic_path`` (moveit_msgs/srv/GetMotionPlan): a coroutine that queues the
+  request as one of the node's calls and awaits its outcome (``ros.moveit_interfaces``
+  translates both ways).
+* ``execute_trajectory`` (ExecuteTrajectory action) and ``move_action`` (MoveGroup action: plan,
+  then execute unless ``plan_only``), where control_msgs loads: coroutines that hand the
+  trajectory to the node's ``ActionExecution`` and await its end, which ``execution_ended``
+  sets from the node's report of each execution status.
+* ``trajectory_execution_event`` (std_msgs/String): ``stop`` cancels every execution these
+  interfaces started.
+* ``compute_cartesian_path``: answered at once, PLANNING_FAILED.
+
+Everything here runs on the node's executor thread; the planning is the node's worker's.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import itertools
+import math
+from typing import Any, Awaitable, Callable
+
+from rclpy.callback_groups import CallbackGroup
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from rclpy.task import Future
+from std_msgs.msg import Header, String
+from trajplan_ros.ros import moveit_interfaces as moveit
+from trajplan_ros.ros.execution import action_type, ActionExecution, resolve_action
+from trajplan_ros.ros.job import Outcome
+from trajplan_ros.ros.mailbox import Job
+from trajplan_ros.ros.settings import Settings
+
+__all__ = ['MoveGroupServer', 'NodeHooks']
+
+
+@dataclass(frozen=True)
+class NodeHooks:
+    """What the MoveIt interfaces use of the planner node."""
+
+    settings: Callable[[], Settings]                    # the settings in force
+    semantic: Callable[[], str]                         # the SRDF in use ('' if none)
+    queue_call: Callable[[Job, str | None], Awaitable[Outcome | None]]   # plan a call in turn
+    execution: Callable[[], ActionExecution]            # the execution through the action
+    report: Callable[[Job, str, str], None]             # an execution status for plan_results
+    header: Callable[[str], Header]                     # a header stamped now in a frame
+    call_ids: itertools.count                           # the node's call numbers
+
+
+class MoveGroupServer:
+    """Serve move_group's interfaces for MoveIt's clients (ValueError: moveit_msgs missing)."""
+
+    def __init__(self, node: Node, hooks: NodeHooks, calls: CallbackGroup,
+                 qos: QoSProfile) -> None:
+        self._node, self._hooks = node, hooks
+        self._msg, srv = moveit.moveit_types()
+        self._codes = self._msg.MoveItErrorCodes
+        self._said: set[str] = set()              # request fields said to be ignored
+        #: the executions running, by goal id: their job and the future of their end
+        self._executions: dict[bytes, tuple[Job, Future]] = {}
+        node.create_service(srv.GetMotionPlan, 'plan_kinematic_path', self._on_motion_plan,
+                            qos_profile=qos, callback_group=calls)
+        node.create_service(srv.GetCartesianPath, 'compute_cartesian_path',
+                            self._on_cartesian_path)
+        served = 'plan_kinematic_path'
+        try:
+            action_type()                                # executes through control_msgs
+        except ValueError as exc:
+            node.get_logger().warning(f'execute_trajectory and move_action not served: {exc}')
+        else:
+            from moveit_msgs.action import ExecuteTrajectory, MoveGroup
+            from rclpy.action import ActionServer, CancelResponse
+
+            self._execute_type, self._move_type = ExecuteTrajectory, MoveGroup
+            ActionServer(node, ExecuteTrajectory, 'execute_trajectory', self._on_execute,
+                         cancel_callback=self._on_cancel, callback_group=calls)
+            ActionServer(node, MoveGroup, 'move_action', self._on_move,
+                         cancel_callback=self._on_cancel, callback_group=calls)
+            self._cancel_accepted = CancelResponse.ACCEPT
+            node.create_subscription(String, 'trajectory_execution_event', self._on_event, 10)
+            served += ', execute_trajectory, move_action, trajectory_execution_event'
+        node.get_logger().info(f"MoveIt's interfaces ready: {served} "
+                               '(compute_cartesian_path answers that it is not offered)')
+
+    # --- planning ---------------------------------------------------------------------------
+
+    async def _on_motion_plan(self, request: Any, response: Any) -> Any:
+        """Answer plan_kinematic_path (``ros.moveit_interfaces``)."""
+        await self._plan('plan_kinematic_path call', request.motion_plan_request,
+                         response.motion_plan_response)
+        return response
+
+    async def _plan(self, kind: str, asked: Any, response: Any) -> str:
+        """Plan a MotionPlanRequest into a MotionPlanResponse; return the code's name."""
+        s = self._hooks.settings()
+        label = f'{kind} #{next(self._hooks.call_ids)}'
+        try:
+            job = moveit.goal_job(label, asked, s, self._hooks.semantic(), Future(),
+                                  self._say_ignored)
+            problem = None
+        except moveit.Refusal as exc:
+            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
+        outcome = await self._hooks.queue_call(job, problem and str(problem))
+        code = (problem.code, str(problem)) if problem else moveit.error_code(outcome, job)
+        moveit.fill_response(response, outcome, code, s, asked.group_name,
+                             self._hooks.header(s.base_frame), self._codes)
+        return code[0]
+
+    def _say_ignored(self, field: str) -> None:
+        if field not in self._said:
+            self._said.add(field)
+            why = ('raised to min_planning_time' if field == 'allowed_planning_time' else
+                   'ignored (one planner: this one)')
+            self._node.get_logger().info(f'plan_kinematic_path: {field} is {why}; said once')
+
+    def _on_cartesian_path(self, request: Any, response: Any) -> Any:
+        """Answer at once: straight-line tool paths are not what this planner plans."""
+        response.error_code = self._codes(val=self._codes.PLANNING_FAILED, source=moveit.SOURCE,
+                                          message='straight-line tool paths are not offered: '
+                                                  'plan_kinematic_path plans the least-time '
+                                                  'motion')
+        return response
+
+    # --- execution --------------------------------------------------------------------------
+
+    async def _on_execute(self, goal: Any) -> Any:
+        """Execute an ExecuteTrajectory goal through the controller's action; end it so."""
+        name, message = await self._execute(goal, goal.request.trajectory.joint_trajectory,
+                                            self._execute_type.Feedback)
+        self._end(goal, name)
+        return self._execute_type.Result(error_code=self._code(name, message))
+
+    async def _on_move(self, goal: Any) -> Any:
+        """Plan a MoveGroup goal, then execute it unless it is plan only; end it so."""
+        feedback = self._move_type.Feedback
+        goal.publish_feedback(feedback(state='PLANNING'))
+        planned = self._msg.MotionPlanResponse()
+        name = await self._plan('move_action goal', goal.request.request, planned)
+        result = self._move_type.Result(
+            error_code=planned.error_code, trajectory_start=planned.trajectory_start,
+            planned_trajectory=planned.trajectory, planning_time=planned.planning_time)
+        if name == 'SUCCESS' and goal.is_cancel_requested:
+            name = 'PREEMPTED'
+            result.error_code = self._code(name, 'cancelled before the execution')
+        elif name == 'SUCCESS' and not goal.request.planning_options.plan_only:
+            name, message = await self._execute(goal, planned.trajectory.joint_trajectory,
+                                                feedback)
+            result.error_code = self._code(name, message)
+            if name == 'SUCCESS':
+                result.executed_trajectory = planned.trajectory
+        goal.publish_feedback(feedback(state='IDLE'))
+        self._end(goal, name)
+        return result
+
+    async def _execute(self, goal: Any, trajectory: Any, feedback: type) -> tuple[str, str]:
+        """Execute a joint trajectory for an action's goal; return the code's name and why."""
+        s = self._hooks.settings()
+        job = Job(f'execute_trajectory #{next(self._hooks.call_ids)}', (math.nan,) * 3)
+        try:
+            motion = moveit.execution_motion(job, trajectory, s,
+                                             resolve_action(self._node, s.controller_action))
+        except moveit.Refusal as exc:
+            self._hooks.report(job, 'refused', str(exc))
+            return exc.code, str(exc)
+        done = Future()
+        key = bytes(goal.goal_id.uuid)
+        self._executions[key] = (job, done)
+        goal.publish_feedback(feedback(state='MONITOR'))
+        execution = self._hooks.execution()
+        execution.submit(motion)
+        if goal.is_cancel_requested:               # asked before it was registered
+            execution.cancel(job)
+        status, message = await done
+        self._executions.pop(key, None)
+        return moveit.EXECUTION_CODES.get(status, 'CONTROL_FAILED'), message
+
+    def execution_ended(self, job: Job, status: str, message: str) -> None:
+        """Take an execution status of ``job``: any but ``accepted`` ends its goal."""
+        for waiting_job, done in self._executions.values():
+            if waiting_job is job and status != 'accepted' and not done.done():
+                done.set_result((status, message))
+
+    def _end(self, goal: Any, name: str) -> None:
+        """End an action's goal as MoveIt does: SUCCEEDED only for SUCCESS."""
+        if goal.is_cancel_requested and name == 'PREEMPTED':
+            goal.canceled()
+        elif name == 'SUCCESS':
+            goal.succeed()
+        else:
+            goal.abort()
+
+    def _code(self, name: str, message: str) -> Any:
+        return self._codes(val=getattr(self._codes, name), message=message,
+                           source=moveit.SOURCE)
+
+    def _on_cancel(self, goal: Any) -> Any:
+        job, _ = self._executions.get(bytes(goal.goal_id.uuid), (None, None))
+        if job is not None:
+            self._hooks.execution().cancel(job)
+        return self._cancel_accepted
+
+    def _on_event(self, msg: String) -> None:
+        """Stop every execution on ``stop``, as move_group's trajectory execution does."""
+        if msg.data != 'stop':
+            self._node.get_logger().info(f'trajectory_execution_event {msg.data!r} ignored: '
+                                         'only "stop" is known')
+            return
+        for job, _ in list(self._executions.values()):
+            self._hooks.execution().cancel(job)
+        self._node.get_logger().info(f'trajectory_execution_event stop: '
+                                     f'{len(self._executions)} executions cancelled')
