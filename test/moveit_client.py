@@ -9,8 +9,8 @@ A MoveIt client's side of plan_kinematic_path, run as a process with moveit_msgs
 ``foreign`` (a joint renamed) sends the planned trajectory to execute_trajectory; or ``move``:
 ``plan_only`` or ``run`` sends the request as a move_action goal instead. Prints one JSON
 line per answer (``answer_of``, and the execution's end; for move_action its result, status
-and feedback states). The test process itself has no moveit_msgs (it is built beside, with its own library
-path).
+and feedback states). The test process itself has no moveit_msgs (it is built beside, with
+its own library path).
 """
 from __future__ import annotations
 
@@ -35,7 +35,8 @@ CODES = {getattr(MoveItErrorCodes, n): n for n in dir(MoveItErrorCodes)
 
 def answer_of(r: Any) -> dict[str, Any]:
     """Return what a test reads of a MotionPlanResponse (or a MoveGroup result)."""
-    traj = (r.trajectory if hasattr(r, 'trajectory') else r.planned_trajectory).joint_trajectory
+    planned = r.trajectory if hasattr(r, 'trajectory') else r.planned_trajectory
+    traj = planned.joint_trajectory
     return {
         'code': CODES.get(r.error_code.val, r.error_code.val), 'message': r.error_code.message,
         'source': r.error_code.source, 'group': getattr(r, 'group_name', ''), 'frame': traj.header.frame_id,

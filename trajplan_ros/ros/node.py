@@ -231,12 +231,7 @@ class PlannerNode(Node):
                             callback_group=calls)
         self.create_service(GetPlan, 'compute_plan', self._on_compute_plan,
                             qos_profile=KEEP_ALL, callback_group=calls)
-        self._move_group: MoveGroupServer | None = None
-        if self.get_parameter('moveit_interfaces').value:
-            self._move_group = MoveGroupServer(self, NodeHooks(
-                lambda: self._settings, self._semantic, self._queue_call,
-                self._action_execution, self._report_execution, self._header,
-                self._call_ids), calls, KEEP_ALL)
+        self._move_group = self._offer_moveit(calls)
         self.create_timer(self._settings.diagnostic_period, self._publish_diagnostics)
         self._worker = threading.Thread(target=self._work, name='trajplan_worker', daemon=True)
         self._worker.start()
@@ -368,6 +363,14 @@ class PlannerNode(Node):
             return
         self._topic_semantic = msg.data
         self._use(settings)
+
+    def _offer_moveit(self, calls: ReentrantCallbackGroup) -> MoveGroupServer | None:
+        """Serve move_group's interfaces if ``moveit_interfaces`` (ValueError: cannot)."""
+        if not self.get_parameter('moveit_interfaces').value:
+            return None
+        return MoveGroupServer(self, NodeHooks(
+            lambda: self._settings, self._semantic, self._queue_call, self._action_execution,
+            self._report_execution, self._header, self._call_ids), calls, KEEP_ALL)
 
     def _semantic(self) -> str:
         """Return the SRDF in use: the parameter's, else the topic's ('' if none)."""
