@@ -39,7 +39,8 @@ def answer_of(r: Any) -> dict[str, Any]:
     traj = planned.joint_trajectory
     return {
         'code': CODES.get(r.error_code.val, r.error_code.val), 'message': r.error_code.message,
-        'source': r.error_code.source, 'group': getattr(r, 'group_name', ''), 'frame': traj.header.frame_id,
+        'source': r.error_code.source, 'group': getattr(r, 'group_name', ''),
+        'frame': traj.header.frame_id,
         'joint_names': list(traj.joint_names), 'planning_time': r.planning_time,
         'times': [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec
                   for p in traj.points],
