@@ -218,7 +218,8 @@ def urdf_move_group(start_node: Callable[..., NodeProcess], env: dict[str, str],
         'robot_description': published.urdf.read_text(encoding='utf-8'),
         'base_link': published.base_link, 'tip_link': published.tip_link,
         'moveit_interfaces': True, 'angular_velocity': 1.0,
-        'min_planning_time': 60.0}}}), encoding='utf-8')      # pymoveit2 allows 0.5 s
+        'min_planning_time': 60.0,                            # pymoveit2 allows 0.5 s
+        'collision_check': False}}}), encoding='utf-8')       # its meshes are not installed
     node = start_node('-r', f'__ns:={namespace}', '-r', '__node:=move_group', '--params-file',
                       str(params), ready=False, env=env)
     node.wait_for(r'move_group\]: ready: ')
@@ -304,8 +305,8 @@ def executing(start_node: Callable[..., NodeProcess], moveit_msgs_env: dict[str,
     controller.wait_for(r'demo_controller\]: ready: ')
     node = start_node('-r', f'__ns:={NS}_exec', '-r', '__node:=move_group', '-p',
                       'moveit_interfaces:=true', ready=False, env=env)     # 0.2 rad/s: seconds
-    node.wait_for(r"move_group\]: MoveIt's interfaces ready: plan_kinematic_path, "
-                  'execute_trajectory')
+    node.wait_for(r"move_group\]: MoveIt's interfaces ready: plan_kinematic_path, .*"
+                  'execute_trajectory, move_action')
     node.wait_for(r'move_group\]: ready: ')
     yield node, env
     assert node.stop() == 0, node.output
@@ -323,6 +324,7 @@ def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> Non
                           timeout=180)
     assert done.returncode == 0, done.stderr[-3000:]
     ran, cancelled, foreign, stopped = map(json.loads, done.stdout.splitlines())
+    assert cancelled['code'] == 'SUCCESS', node.output
     assert ran['code'] == 'SUCCESS' and ran['execution']['code'] == 'SUCCESS', ran
     assert ran['execution']['status'] == 4                      # SUCCEEDED
     assert cancelled['execution']['code'] == 'PREEMPTED', cancelled
@@ -345,7 +347,7 @@ def test_move_action_plans_then_executes_unless_plan_only(executing) -> None:
                           timeout=180)
     assert done.returncode == 0, done.stderr[-3000:]
     planned, moved, unreachable = map(json.loads, done.stdout.splitlines())
-    assert planned['code'] == moved['code'] == 'SUCCESS', (planned, moved)
+    assert planned['code'] == moved['code'] == 'SUCCESS', node.output
     assert planned['status'] == moved['status'] == 4                # SUCCEEDED
     assert planned['states'] == ['PLANNING', 'IDLE'] and planned['executed'] == 0
     assert moved['states'] == ['PLANNING', 'MONITOR', 'IDLE']
@@ -353,3 +355,73 @@ def test_move_action_plans_then_executes_unless_plan_only(executing) -> None:
     assert np.linalg.norm(tool_at(moved['positions'][-1]) - REACHABLE) <= 0.001 + 1e-9
     assert unreachable['code'] == 'NO_IK_SOLUTION' and unreachable['status'] == 6
     assert unreachable['positions'] == []
+
+
+def scene_steps(node_ns: str, env: dict[str, str], *steps: dict[str, Any]) -> list[Any]:
+    """Run ``moveit_scene_client.py``'s steps against move_group in ``node_ns``."""
+    done = subprocess.run([sys.executable, str(CLIENT.with_name('moveit_scene_client.py')),
+                           node_ns, json.dumps(steps)], env=env, capture_output=True,
+                          text=True, timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return [json.loads(line) for line in done.stdout.splitlines()]
+
+
+def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them(
+        start_node, moveit_msgs_env) -> None:
+    ns = f'{NS}_scene'
+    node = start_node('-r', f'__ns:={ns}', '-r', '__node:=move_group', '-p',
+                      'moveit_interfaces:=true', '-p', 'angular_velocity:=1.0', ready=False,
+                      env=moveit_msgs_env)
+    node.wait_for(r'move_group\]: ready: ')
+    assert node.has(r'collision check: \d+ link pairs')           # on by default here
+    crate = {'id': 'crate', 'frame': 'base_link', 'pose': list(REACHABLE),
+             'primitives': [['BOX', [0.05, 0.05, 0.05], [0.0, 0.0, 0.0]]]}
+    away = [0.3, -0.3, 0.05]
+    tetrahedron = [[[-0.03, -0.03, -0.03], [0.06, 0.0, 0.0], [0.0, 0.06, 0.0],
+                    [0.0, 0.0, 0.06]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]]
+    free, = scene_steps(ns, moveit_msgs_env, {'plan': {'position': REACHABLE}})
+    there = dict(zip(ARM.joint_names, free['last']))
+    (added, inside, joint, bad, foreign, moved, after_move, appended, scene, mesh,
+     in_mesh, acm, cleared, removed, again) = scene_steps(
+        ns, moveit_msgs_env,
+        {'publish': crate, 'expect': ['crate']},
+        {'plan': {'position': REACHABLE}},
+        {'plan': {'joint_goal': there}},
+        {'publish': {'id': 'empty'}, 'expect': ['crate']},
+        {'publish': {**crate, 'id': 'far', 'frame': 'camera_link'}, 'expect': ['crate']},
+        {'publish': {'id': 'crate', 'operation': 'MOVE', 'frame': 'base_link', 'pose': away},
+         'expect': ['crate']},
+        {'plan': {'position': REACHABLE}},
+        {'publish': {'id': 'crate', 'operation': 'APPEND', 'frame': 'base_link',
+                     'pose': away, 'primitives': [['CONE', [0.1, 0.03], [0.0, 0.0, 0.1]],
+                                                  ['CYLINDER', [0.1, 0.02], [0.1, 0, 0]]]},
+         'expect': ['crate']},
+        {'scene': True},
+        {'publish': {'id': 'part', 'frame': 'base_link', 'pose': list(REACHABLE),
+                     'mesh': tetrahedron}, 'expect': ['crate', 'part']},
+        {'plan': {'position': REACHABLE}},
+        {'apply': {'acm': True}},
+        {'apply': {'is_diff': False, 'objects': [crate]}},
+        {'publish': {'id': '', 'operation': 'REMOVE'}, 'expect': []},
+        {'plan': {'position': REACHABLE}})
+    assert node.stop() == 0, node.output
+    assert free['code'] == 'SUCCESS' and added['ids'] == ['crate'], (free, added)
+    assert inside['code'] == 'GOAL_IN_COLLISION', inside
+    assert "inside obstacle 'crate'" in inside['message']
+    assert joint['code'] == 'GOAL_IN_COLLISION', joint
+    assert joint['message'].startswith('the joint goal is in collision: ')
+    assert 'crate' in joint['message']
+    assert bad['ids'] == foreign['ids'] == ['crate']
+    assert node.has('collision_object refused, scene kept: collision object .empty.: no '
+                    'primitive or mesh')
+    assert node.has('collision_object refused, scene kept: collision object .far.: .*'
+                    'camera_link')
+    assert moved['ids'] == ['crate'] and after_move['code'] == 'SUCCESS', after_move
+    assert scene['objects'] == [{'id': 'crate', 'frame': 'base_link', 'primitives': [1, 4, 3],
+                                 'meshes': 0}]
+    assert scene['joints'] == list(ARM.joint_names)
+    assert mesh['ids'] == ['crate', 'part']
+    assert in_mesh['code'] == 'GOAL_IN_COLLISION' and 'part' in in_mesh['message'], in_mesh
+    assert acm == {'success': False} and cleared == {'success': True}
+    assert node.has('apply_planning_scene refused, scene kept: collision-matrix edits')
+    assert removed['ids'] == [] and again['code'] == 'SUCCESS', again

@@ -133,3 +133,13 @@ def test_a_turn_and_its_quaternion_are_one_rotation() -> None:
     axis = np.array([0.0, 0.0, 0.5])                  # half a radian about z
     assert rotation_matrix(quaternion_of_turn(axis)) @ [1.0, 0.0, 0.0] == pytest.approx(
         [np.cos(0.5), np.sin(0.5), 0.0], abs=1e-15)
+
+
+def test_a_start_already_inside_the_region_is_the_plan_without_a_fault() -> None:
+    # the arm stopped with its tool on the region's edge: no joint moves, so none fixes the
+    # scale of the multipliers (a division by a zero slope before)
+    start = np.array([0.8987569478698615, 0.13059056017413162, 0.8987569478698952,
+                      -0.20651430411764007, 0.0])
+    result = plan((0.151171, 0.19162, 0.172124), start, seed=0, tolerance=0.001)
+    assert result.success, result.message
+    assert result.motion_time_s < 1e-6 and result.position_error_m <= 0.001

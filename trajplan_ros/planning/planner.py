@@ -332,14 +332,15 @@ def _joint_goal_clear(result: PlanResult, obj: Objective, r: PlanRequest,
         return
     clear = check_motion(world, obj.start, q, result.law, r.motion.timing, True, limits)
     if clear.free:
-        _moved(result, obj, q, result.motion_time_s, result.efficiency, clear)
+        _moved(result, obj, q, result.motion_time_s, result.efficiency, clear,
+               reached='reached the joint goal')
         return
     rng = r.seed if isinstance(r.seed, np.random.Generator) else np.random.default_rng(r.seed)
     around = (detour(obj, world, result.law, r.motion.timing, q[None], rng, r.tolerance,
                      interrupt, more_goals=False) if r.detours else None)
     if around is not None:
         _moved(result, obj, around.x, around.duration, np.nan if around.vias else
-               result.efficiency, around.clearance, around.vias)
+               result.efficiency, around.clearance, around.vias, 'reached the joint goal')
         return
     result.status = PlanStatus.NOT_REACHED
     result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
@@ -396,7 +397,8 @@ def _start_note(clear: Clearance) -> str:
 
 
 def _moved(result: PlanResult, obj: Objective, x: np.ndarray, duration: float,
-           efficiency: float, clear: Clearance, vias: tuple[np.ndarray, ...] = ()) -> None:
+           efficiency: float, clear: Clearance, vias: tuple[np.ndarray, ...] = (),
+           reached: str = 'reached') -> None:
     """Put the free motion to joint goal x (planned joints), through ``vias``, into ``result``."""
     joint_goal = obj.full(x)[0]
     p, _ = obj.arm.tool(joint_goal[None, :])
@@ -405,7 +407,7 @@ def _moved(result: PlanResult, obj: Objective, x: np.ndarray, duration: float,
     result.motion_time_s, result.efficiency = duration, efficiency
     result.clearance_m, result.clearance_pair = clear.clearance, clear.pair
     via = f" via {len(vias)} point{'s' if len(vias) > 1 else ''}" if vias else ''
-    result.message = (f'reached in {duration:.4f} s of motion{via}, error '
+    result.message = (f'{reached} in {duration:.4f} s of motion{via}, error '
                       f"{describe_residual(result.position_error_m, 'm')}, "
                       f'{clear.describe()}{_start_note(clear)}')
 

@@ -28,7 +28,10 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.task import Future
 from std_msgs.msg import Header, String
+from trajplan_ros.collision.errors import InvalidCollisionInput
+from trajplan_ros.collision.scene import Obstacle
 from trajplan_ros.ros import moveit_interfaces as moveit
+from trajplan_ros.ros.collision_objects import MoveItObjects
 from trajplan_ros.ros.execution import action_type, ActionExecution, resolve_action
 from trajplan_ros.ros.job import Outcome
 from trajplan_ros.ros.mailbox import Job
@@ -48,6 +51,10 @@ class NodeHooks:
     report: Callable[[Job, str, str], None]             # an execution status for plan_results
     header: Callable[[str], Header]                     # a header stamped now in a frame
     call_ids: itertools.count                           # the node's call numbers
+    joint_angles: Callable[[], dict[str, float]]        # the chain's angles now, by name
+    #: plan among these world objects from the next job (InvalidCollisionInput: refused);
+    #: returns whether collisions are checked
+    use_objects: Callable[[list[Obstacle]], bool]
 
 
 class MoveGroupServer:
@@ -61,11 +68,17 @@ class MoveGroupServer:
         self._said: set[str] = set()              # request fields said to be ignored
         #: the executions running, by goal id: their job and the future of their end
         self._executions: dict[bytes, tuple[Job, Future]] = {}
+        self._objects = MoveItObjects()
+        node.create_subscription(self._msg.CollisionObject, 'collision_object',
+                                 self._on_collision_object, qos)
+        node.create_service(srv.GetPlanningScene, 'get_planning_scene', self._on_get_scene)
+        node.create_service(srv.ApplyPlanningScene, 'apply_planning_scene', self._on_apply_scene)
         node.create_service(srv.GetMotionPlan, 'plan_kinematic_path', self._on_motion_plan,
                             qos_profile=qos, callback_group=calls)
         node.create_service(srv.GetCartesianPath, 'compute_cartesian_path',
                             self._on_cartesian_path)
-        served = 'plan_kinematic_path'
+        served = ('plan_kinematic_path, collision_object, get_planning_scene, '
+                  'apply_planning_scene')
         try:
             action_type()                                # executes through control_msgs
         except ValueError as exc:
@@ -212,3 +225,64 @@ class MoveGroupServer:
             self._hooks.execution().cancel(job)
         self._node.get_logger().info(f'trajectory_execution_event stop: '
                                      f'{len(self._executions)} executions cancelled')
+
+    # --- the planning scene -----------------------------------------------------------------
+
+    def _on_collision_object(self, msg: Any) -> None:
+        """Apply a world object, or refuse it with the reason (the scene stays as it was)."""
+        problem = self._apply_objects([msg])
+        if problem:
+            self._node.get_logger().warning(f'collision_object refused, scene kept: {problem}')
+
+    def _apply_objects(self, messages: list[Any], replace: bool = False) -> str | None:
+        """Apply world objects (``replace``: instead of all held); return why not, or None."""
+        s = self._hooks.settings()
+        angles = self._hooks.joint_angles()
+        held = self._objects.objects
+        try:
+            if replace:
+                self._objects.objects = {}
+            objects = self._objects.apply(messages, lambda f: s.frames.to_base(f, angles))
+            checked = self._hooks.use_objects(self._objects.obstacles(objects))
+        except (InvalidCollisionInput, ValueError) as exc:
+            self._objects.objects = held
+            return str(exc).splitlines()[0]
+        self._objects.objects = objects
+        log = self._node.get_logger()
+        if checked:
+            log.info(f'scene for the next plan: {len(objects)} world objects from MoveIt')
+        else:
+            log.warning(f'{len(objects)} world objects from MoveIt held, but collision_check '
+                        'is false: plans do not avoid them')
+        return None
+
+    def _on_get_scene(self, request: Any, response: Any) -> Any:
+        """Answer get_planning_scene: the world objects, the robot's state, the names."""
+        s = self._hooks.settings()
+        scene = response.scene
+        scene.name, scene.is_diff = 'trajplan_ros', False
+        scene.robot_state.joint_state.header = self._hooks.header(s.base_frame)
+        angles = self._hooks.joint_angles()
+        scene.robot_state.joint_state.name = list(angles)
+        scene.robot_state.joint_state.position = list(angles.values())
+        scene.world.collision_objects = [placed.msg for placed in self._objects.objects.values()]
+        for o in scene.world.collision_objects:
+            o.operation = o.ADD
+        return response
+
+    def _on_apply_scene(self, request: Any, response: Any) -> Any:
+        """Apply a PlanningScene's world objects; a collision-matrix edit is refused."""
+        scene = request.scene
+        problem = None
+        robot = scene.robot_state
+        if scene.allowed_collision_matrix.entry_names or robot.attached_collision_objects:
+            problem = ('collision-matrix edits and attached objects are not offered: give the '
+                       'SRDF (robot_description_semantic) its disable_collisions pairs')
+        else:
+            problem = self._apply_objects(list(scene.world.collision_objects),
+                                          replace=not scene.is_diff)
+        if problem:
+            self._node.get_logger().warning(f'apply_planning_scene refused, scene kept: '
+                                            f'{problem}')
+        response.success = problem is None
+        return response

@@ -102,7 +102,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header, String
 from trajectory_msgs.msg import JointTrajectory
 from trajplan_ros.collision.distances import CollisionWorld
-from trajplan_ros.collision.scene import Scene
+from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.planning import Mode, prepare
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros import job as jobs, outcomes
@@ -181,8 +181,12 @@ class PlannerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('trajplan', **kwargs)
-        for spec in PARAMETERS:
-            self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+        specs = {spec.name: spec for spec in PARAMETERS}
+        moveit = self.declare_parameter('moveit_interfaces', False,
+                                        _descriptor(specs.pop('moveit_interfaces'))).value
+        for spec in specs.values():             # move_group checks collisions unless told not
+            default = True if spec.name == 'collision_check' and moveit else spec.default
+            self.declare_parameter(spec.name, default, _descriptor(spec))
         self._topic_description = ''                  # the last usable robot_description
         self._topic_semantic = ''                     # the last robot_description_semantic
         self._live = LiveScene()                      # obstacles from collision_objects
@@ -345,12 +349,34 @@ class PlannerNode(Node):
             f'{w.arm.skip_source}), {len(w.scene.obstacles)} obstacles, padding {w.padding} m')
 
     def _with_live_scene(self, settings: Settings) -> Settings:
-        """Return ``settings`` whose scene has the obstacles received as markers too."""
-        if settings.world is None or not self._live.obstacles:
+        """Return ``settings`` whose scene has the obstacles received on topics too."""
+        if settings.world is None or not self._live.received():
             return settings
         w = settings.world
-        scene = Scene(w.scene.obstacles + tuple(self._live.obstacles.values()))
+        scene = Scene(w.scene.obstacles + self._live.received())
         return settings.planning_with(world=CollisionWorld(w.arm, scene, w.padding))
+
+    def _use_live(self, markers: dict[str, Obstacle] | None = None,
+                  moveit: list[Obstacle] | None = None) -> bool:
+        """
+        Plan among these received obstacles from the next job; return whether it checks them.
+
+        Raises InvalidCollisionInput (ids twice, too many) and keeps the scene as it was.
+        """
+        before = self._live.obstacles, self._live.moveit
+        if markers is not None:
+            self._live.obstacles = markers
+        if moveit is not None:
+            self._live.moveit = tuple(moveit)
+        base = Settings.from_parameters(self._parameter_values(), self._topic_description,
+                                        strict_start=False, topic_semantic=self._topic_semantic)
+        try:
+            self._with_live_scene(base)
+        except Exception:
+            self._live.obstacles, self._live.moveit = before
+            raise
+        self._use(base)
+        return base.world is not None
 
     def _on_semantic(self, msg: String) -> None:
         """Skip the pairs of an SRDF from now on (unless the parameter is set), or say why not."""
@@ -370,7 +396,14 @@ class PlannerNode(Node):
             return None
         return MoveGroupServer(self, NodeHooks(
             lambda: self._settings, self._semantic, self._queue_call, self._action_execution,
-            self._report_execution, self._header, self._call_ids), calls, KEEP_ALL)
+            self._report_execution, self._header, self._call_ids, self._joint_angles,
+            lambda obstacles: self._use_live(moveit=obstacles)), calls, KEEP_ALL)
+
+    def _joint_angles(self) -> dict[str, float]:
+        """Return the chain's joint angles now (joint_states, else the planned start)."""
+        s = self._settings
+        start = self._states.start(s.arm.joint_names, s.start).q
+        return {name: float(q) for name, q in zip(s.arm.joint_names, start)}
 
     def _semantic(self) -> str:
         """Return the SRDF in use: the parameter's, else the topic's ('' if none)."""
@@ -380,15 +413,10 @@ class PlannerNode(Node):
         """Change the scene of the next plan by markers, or refuse them all with the reason."""
         try:
             obstacles = self._live.apply(msg, self._settings.base_frame)
-            if self._settings.world is not None:
-                Scene(self._settings.world.scene.obstacles + tuple(obstacles.values()))
+            self._use_live(markers=obstacles)
         except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
             self.get_logger().warning(f'collision_objects refused, scene kept: {_reason(exc)}')
             return
-        self._live.obstacles = obstacles
-        base = Settings.from_parameters(self._parameter_values(), self._topic_description,
-                                        strict_start=False, topic_semantic=self._topic_semantic)
-        self._use(base)
         self.get_logger().info(f'scene for the next plan: {len(obstacles)} obstacles from '
                                'collision_objects')
 

@@ -38,10 +38,15 @@ _SPHERES = ColorRGBA(r=0.2, g=0.6, b=0.9, a=0.3)
 
 
 class LiveScene:
-    """The obstacles received as markers, by id ``ns/id``."""
+    """The obstacles received as markers, by id ``ns/id``, and MoveIt's world objects'."""
 
     def __init__(self) -> None:
         self.obstacles: dict[str, Obstacle] = {}
+        self.moveit: tuple[Obstacle, ...] = ()        # ``ros.collision_objects``
+
+    def received(self) -> tuple[Obstacle, ...]:
+        """Return every obstacle received, markers' first."""
+        return tuple(self.obstacles.values()) + self.moveit
 
     def apply(self, msg: MarkerArray, base_frame: str) -> dict[str, Obstacle]:
         """Return the obstacles after ``msg`` (InvalidCollisionInput: none of it applied)."""

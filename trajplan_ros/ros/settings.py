@@ -127,7 +127,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   bounds=(0.0, 1e9)),
     ParameterSpec('collision_check', False,
                   'plan motions that keep padding from the scene and between the links (the '
-                  "URDF's <collision> shapes); false: no check"),
+                  "URDF's <collision> shapes); false: no check; default true with "
+                  'moveit_interfaces'),
     ParameterSpec('robot_description_semantic', '',
                   'SRDF of the arm (XML text): its disable_collisions pairs are skipped; empty: '
                   'the robot_description_semantic topic, else computed as MoveIt Setup '

@@ -128,10 +128,13 @@ def multipliers(obj: Objective, x: np.ndarray) -> np.ndarray | None:
     limit = (x - obj.lower <= ON_LIMIT) | (obj.upper - x <= ON_LIMIT)
     free = ~(ties | limit)
     ties &= ~limit                  # a tying joint on a limit has a multiplier of each kind
+    ties &= slope > 0.0             # a joint that has not moved (x at the start) fixes no scale
     if not ties.any():
         return None
     jt = constraint_jacobian(obj, x).T                      # (planned, constraints)
     rows = np.vstack((jt[free], (np.sign(d[ties]) / slope[ties]) @ jt[ties]))
+    if not np.all(np.isfinite(rows)):
+        return None
     rhs = np.zeros(rows.shape[0])
     rhs[-1] = 1.0
     lam = np.linalg.lstsq(rows, rhs, rcond=None)[0]
