@@ -15,6 +15,10 @@ A MoveIt client's side of the planning scene, run as a process with moveit_msgs 
   (a collision-matrix entry); prints whether it succeeded.
 * ``scene``: prints get_planning_scene's objects (id, frame, primitive types, meshes) and
   robot state's joint names.
+* ``fk``: compute_fk of ``links`` in ``frame`` at ``state`` (angles by name); prints the code
+  and each pose as [x, y, z, qx, qy, qz, qw].
+* ``ik``: compute_ik of the tip's ``position`` and ``orientation`` in ``frame`` from ``seed``
+  (angles by name), ``avoid_collisions``; prints the code, message and solution by name.
 """
 from __future__ import annotations
 
@@ -25,7 +29,8 @@ from typing import Any
 
 from geometry_msgs.msg import Point, Pose
 from moveit_msgs.msg import CollisionObject, MoveItErrorCodes
-from moveit_msgs.srv import ApplyPlanningScene, GetMotionPlan, GetPlanningScene
+from moveit_msgs.srv import (ApplyPlanningScene, GetMotionPlan, GetPlanningScene,
+                             GetPositionFK, GetPositionIK)
 import rclpy
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from shape_msgs.msg import Mesh, MeshTriangle, SolidPrimitive
@@ -69,6 +74,29 @@ def call(node: Any, client: Any, request: Any) -> Any:
     return future.result()
 
 
+def pose_list(p: Pose) -> list[float]:
+    return [p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
+            p.orientation.z, p.orientation.w]
+
+
+def solve(node: Any, client: Any, spec: dict[str, Any]) -> dict[str, Any]:
+    """Ask compute_ik as a ``ik`` step says; return what the test reads of the answer."""
+    request = GetPositionIK.Request()
+    asked = request.ik_request
+    asked.avoid_collisions = spec.get('avoid_collisions', True)
+    asked.pose_stamped.header.frame_id = spec.get('frame', '')
+    asked.pose_stamped.pose = pose(spec['position'])
+    o = asked.pose_stamped.pose.orientation
+    o.x, o.y, o.z, o.w = spec['orientation']
+    state = asked.robot_state.joint_state
+    state.name, state.position = zip(*spec['seed'].items())
+    r = call(node, client, request)
+    solution = r.solution.joint_state
+    return {'code': CODES.get(r.error_code.val, r.error_code.val),
+            'message': r.error_code.message,
+            'solution': dict(zip(solution.name, solution.position))}
+
+
 def main() -> None:
     namespace, steps = sys.argv[1], json.loads(sys.argv[2])
     rclpy.init()
@@ -79,6 +107,8 @@ def main() -> None:
     scenes = node.create_client(GetPlanningScene, f'{namespace}/get_planning_scene')
     applies = node.create_client(ApplyPlanningScene, f'{namespace}/apply_planning_scene')
     plans = node.create_client(GetMotionPlan, f'{namespace}/plan_kinematic_path')
+    fk = node.create_client(GetPositionFK, f'{namespace}/compute_fk')
+    ik = node.create_client(GetPositionIK, f'{namespace}/compute_ik')
 
     def scene() -> Any:
         return call(node, scenes, GetPlanningScene.Request()).scene
@@ -109,6 +139,19 @@ def main() -> None:
             if step['apply'].get('acm'):
                 request.scene.allowed_collision_matrix.entry_names = ['link1', 'link3']
             print(json.dumps({'success': call(node, applies, request).success}), flush=True)
+        elif 'fk' in step:
+            request = GetPositionFK.Request(fk_link_names=step['fk']['links'])
+            request.header.frame_id = step['fk'].get('frame', '')
+            state = request.robot_state.joint_state
+            state.name, state.position = zip(*step['fk']['state'].items())
+            r = call(node, fk, request)
+            print(json.dumps({'code': CODES.get(r.error_code.val, r.error_code.val),
+                              'message': r.error_code.message,
+                              'links': list(r.fk_link_names),
+                              'poses': [pose_list(p.pose) for p in r.pose_stamped]}),
+                  flush=True)
+        elif 'ik' in step:
+            print(json.dumps(solve(node, ik, step['ik'])), flush=True)
         else:
             got = scene()
             print(json.dumps({

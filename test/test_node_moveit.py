@@ -142,6 +142,28 @@ def test_a_joint_goal_moves_the_joints_it_names_there_and_keeps_the_others(move_
     assert answer['times'][-1] == pytest.approx(0.7)
 
 
+def test_compute_fk_poses_links_and_a_pose_a_five_joint_arm_cannot_take_has_no_ik(
+        move_group) -> None:
+    node, env = move_group
+    q = np.array([-0.4, 0.5, 0.9, 0.3, 0.2])
+    tip = ARM.frames(q[None])[0, -1]
+    state = dict(zip(ARM.joint_names, q.tolist()))
+    rotated = tip[:3, :3] @ np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)
+    fk, unknown, cannot = scene_steps(
+        NS, env, {'fk': {'links': ['tool_link', 'base_link'], 'state': state}},
+        {'fk': {'links': ['camera_link'], 'state': state}},
+        {'ik': {'position': tip[:3, 3].tolist(), 'seed': state,
+                'orientation': quaternions(rotated[None])[0].tolist()}})
+    assert fk['code'] == 'SUCCESS' and fk['links'] == ['tool_link', 'base_link'], fk
+    np.testing.assert_allclose(fk['poses'][0][:3], tip[:3, 3], atol=1e-9)
+    turn = quaternions(tip[None, :3, :3])[0]
+    assert abs(float(np.dot(fk['poses'][0][3:], turn))) == pytest.approx(1.0, abs=1e-9)
+    assert fk['poses'][1] == [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+    assert unknown['code'] == 'INVALID_LINK_NAME' and 'camera_link' in unknown['message']
+    assert cannot['code'] == 'NO_IK_SOLUTION' and cannot['solution'] == {}, cannot
+    assert 'rad from' in cannot['message']
+
+
 def test_a_five_joint_arm_asked_a_pose_it_cannot_take_says_how_far(move_group) -> None:
     q = np.array([0.3, 0.4, -0.6, 0.5, 0.0])
     frame = ARM.frames(q[None])[0, -1]
@@ -274,15 +296,24 @@ def test_pymoveit2_plans_full_poses_for_the_panda(start_node, moveit_msgs_env,
     answers = pymoveit2_plans(PANDA, f'{NS}_panda', moveit_msgs_env, [
         {'position': f[:3, 3].tolist(), 'quat_xyzw': quaternions(f[None, :3, :3])[0].tolist()}
         for f in frames])                                   # pymoveit2's 1 mm and 0.001 rad
+    seed = {**dict(zip(arm.joint_names, np.clip(0.0, arm.lower, arm.upper).tolist())),
+            'panda_finger_joint1': 0.02}
+    ik, = scene_steps(f'{NS}_panda', moveit_msgs_env, {'ik': {
+        'position': frames[0][:3, 3].tolist(), 'seed': seed,
+        'orientation': quaternions(frames[0][None, :3, :3])[0].tolist()}})
     assert node.stop() == 0, node.output
-    assert node.has('plan_kinematic_path: allowed_planning_time is raised to '
-                    'min_planning_time; said once')
+    assert node.has('allowed_planning_time is raised to min_planning_time; said once')
     for goal, answer in zip(frames, answers):
         assert answer is not None, node.output
         end = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
         assert np.linalg.norm(end[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
         turn = (np.trace(goal[:3, :3].T @ end[:3, :3]) - 1) / 2
         assert turn >= math.cos(0.001) - 1e-9
+    assert ik['code'] == 'SUCCESS', ik                          # the node's 1e-6 m and rad
+    assert ik['solution']['panda_finger_joint1'] == 0.02        # the seed's other joints
+    end = arm.frames(np.array([[ik['solution'][n] for n in arm.joint_names]]))[0, -1]
+    assert np.linalg.norm(end[:3, 3] - frames[0][:3, 3]) <= 1e-6 + 1e-9
+    assert (np.trace(frames[0][:3, :3].T @ end[:3, :3]) - 1) / 2 >= math.cos(1e-6) - 1e-9
 
 
 def test_the_bench_measures_round_trips_beside_the_plan(moveit_msgs_env) -> None:

@@ -26,6 +26,7 @@ from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Obstacle, pose_matrix
 from trajplan_ros.collision.shapes import MAX_MESH_VERTICES, Shape
 from trajplan_ros.kinematics.lazy_modules import lazy
+from trajplan_ros.ros.messages import pose_msg
 
 trimesh = lazy('trimesh')
 
@@ -117,10 +118,10 @@ def _appended(placed: PlacedObject, msg: Any, frame_pose: np.ndarray) -> PlacedO
             (out.primitives, out.primitive_poses, msg.primitives, msg.primitive_poses),
             (out.meshes, out.mesh_poses, msg.meshes, msg.mesh_poses)):
         while len(poses) < len(shapes):                     # missing poses: identity
-            poses.append(_msg_pose(np.eye(4), type(out.pose)))
+            poses.append(pose_msg(np.eye(4)))
         for i, shape in enumerate(new):
             shapes.append(shape)
-            poses.append(_msg_pose(into @ _pose_at(new_poses, i, 'object'), type(out.pose)))
+            poses.append(pose_msg(into @ _pose_at(new_poses, i, 'object')))
     return PlacedObject(out, placed.frame_pose)
 
 
@@ -140,17 +141,6 @@ def _pose(pose: Any, where: str) -> np.ndarray:
 
 def _pose_at(poses: Any, i: int, where: str) -> np.ndarray:
     return _pose(poses[i], where) if i < len(poses) else np.eye(4)
-
-
-def _msg_pose(matrix: np.ndarray, kind: type) -> Any:
-    """Return a 4x4 transform as a geometry_msgs/Pose (``kind``)."""
-    from trajplan_ros.kinematics.rotations import quaternions
-
-    out = kind()
-    out.position.x, out.position.y, out.position.z = (float(v) for v in matrix[:3, 3])
-    x, y, z, w = (float(v) for v in quaternions(matrix[None, :3, :3])[0])
-    out.orientation.x, out.orientation.y, out.orientation.z, out.orientation.w = x, y, z, w
-    return out
 
 
 def _primitive(primitive: Any, pose: np.ndarray, where: str) -> Shape:

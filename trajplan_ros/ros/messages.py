@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import array
 
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
+import numpy as np
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from trajplan_ros.kinematics import ArmModel
@@ -14,7 +15,7 @@ from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.planning import Trajectory
 
 
-__all__ = ['path_msg', 'trajectory_msg']
+__all__ = ['path_msg', 'pose_msg', 'trajectory_msg']
 
 
 def trajectory_msg(traj: Trajectory) -> JointTrajectory:
@@ -50,3 +51,11 @@ def path_msg(arm: ArmModel, traj: Trajectory, header: Header) -> Path:
         o.x, o.y, o.z, o.w = qx, qy, qz, qw
         poses.append(pose)
     return Path(header=header, poses=poses)
+
+
+def pose_msg(matrix: np.ndarray) -> Pose:
+    """Return a 4x4 transform as a geometry_msgs/Pose."""
+    x, y, z, w = (float(v) for v in quaternions(matrix[None, :3, :3])[0])
+    t = matrix[:3, 3]
+    return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])),
+                orientation=Quaternion(x=x, y=y, z=z, w=w))

@@ -23,6 +23,7 @@ import itertools
 import math
 from typing import Any, Awaitable, Callable
 
+from geometry_msgs.msg import PoseStamped
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -35,6 +36,7 @@ from trajplan_ros.ros.collision_objects import MoveItObjects
 from trajplan_ros.ros.execution import action_type, ActionExecution, resolve_action
 from trajplan_ros.ros.job import Outcome
 from trajplan_ros.ros.mailbox import Job
+from trajplan_ros.ros.messages import pose_msg
 from trajplan_ros.ros.settings import Settings
 
 __all__ = ['MoveGroupServer', 'NodeHooks']
@@ -77,8 +79,11 @@ class MoveGroupServer:
                             qos_profile=qos, callback_group=calls)
         node.create_service(srv.GetCartesianPath, 'compute_cartesian_path',
                             self._on_cartesian_path)
-        served = ('plan_kinematic_path, collision_object, get_planning_scene, '
-                  'apply_planning_scene')
+        node.create_service(srv.GetPositionIK, 'compute_ik', self._on_ik, qos_profile=qos,
+                            callback_group=calls)
+        node.create_service(srv.GetPositionFK, 'compute_fk', self._on_fk)
+        served = ('plan_kinematic_path, compute_ik, compute_fk, collision_object, '
+                  'get_planning_scene, apply_planning_scene')
         try:
             action_type()                                # executes through control_msgs
         except ValueError as exc:
@@ -125,9 +130,50 @@ class MoveGroupServer:
     def _say_ignored(self, field: str) -> None:
         if field not in self._said:
             self._said.add(field)
-            why = ('raised to min_planning_time' if field == 'allowed_planning_time' else
-                   'ignored (one planner: this one)')
-            self._node.get_logger().info(f'plan_kinematic_path: {field} is {why}; said once')
+            why = ('raised to min_planning_time' if field in ('allowed_planning_time', 'timeout')
+                   else 'ignored (one planner: this one)')
+            self._node.get_logger().info(f'{field} is {why}; said once')
+
+    async def _on_ik(self, request: Any, response: Any) -> Any:
+        """Answer compute_ik: the joint goal the planner would move to from the seed."""
+        s = self._hooks.settings()
+        label = f'compute_ik call #{next(self._hooks.call_ids)}'
+        ik = request.ik_request
+        try:
+            job = moveit.ik_job(label, ik, s, Future(), self._say_ignored)
+            problem = None
+        except moveit.Refusal as exc:
+            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
+        outcome = await self._hooks.queue_call(job, problem and str(problem))
+        name, message = (problem.code, str(problem)) if problem else moveit.error_code(
+            outcome, job)
+        if name in ('GOAL_CONSTRAINTS_VIOLATED', 'PLANNING_FAILED'):
+            name = 'NO_IK_SOLUTION'          # no pose there, or none the arm moves to freely
+        response.error_code = self._code(name, message)
+        if name == 'SUCCESS':
+            state = response.solution.joint_state
+            state.header = self._hooks.header(s.base_frame)
+            seed = dict(zip(ik.robot_state.joint_state.name, ik.robot_state.joint_state.position))
+            solved = dict(zip(s.arm.joint_names, map(float, outcome.result.joint_goal)))
+            state.name = list(solved) + [n for n in seed if n not in solved]
+            state.position = [solved.get(n, seed.get(n, 0.0)) for n in state.name]
+        return response
+
+    def _on_fk(self, request: Any, response: Any) -> Any:
+        """Answer compute_fk: each link's pose in the request's frame at its robot state."""
+        s = self._hooks.settings()
+        try:
+            poses = moveit.fk_poses(request, s, self._hooks.joint_angles())
+        except moveit.Refusal as exc:
+            response.error_code = self._code(exc.code, str(exc))
+            return response
+        header = self._hooks.header(request.header.frame_id or s.base_frame)
+        for link, pose in zip(request.fk_link_names, poses):
+            stamped = PoseStamped(header=header, pose=pose_msg(pose))
+            response.pose_stamped.append(stamped)
+            response.fk_link_names.append(link)
+        response.error_code = self._code('SUCCESS', '')
+        return response
 
     def _on_cartesian_path(self, request: Any, response: Any) -> Any:
         """Answer at once: straight-line tool paths are not what this planner plans."""

@@ -36,7 +36,7 @@ from trajplan_ros.ros.messages import trajectory_msg
 from trajplan_ros.ros.settings import Settings
 
 __all__ = ['EXECUTION_CODES', 'HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'execution_motion',
-           'fill_response', 'goal_job', 'moveit_types', 'srdf_groups']
+           'fill_response', 'fk_poses', 'goal_job', 'ik_job', 'moveit_types', 'srdf_groups']
 
 #: The error code's source, as move_group names its own.
 SOURCE = 'trajplan_ros'
@@ -121,15 +121,72 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
     if scale:                                 # MoveIt's rule: any other factor means 1
         changes['motion'] = dataclasses.replace(s.request.motion, **scale)
-    budget = request.allowed_planning_time
-    if not 0.0 < budget < math.inf:
-        budget = s.request.max_planning_time
-    if budget < s.min_planning_time:
-        ignored('allowed_planning_time')
-        budget = s.min_planning_time
-    changes['max_planning_time'] = float(budget)
+    changes['max_planning_time'] = _budget(request.allowed_planning_time, 'allowed_planning_time',
+                                           s, ignored)
     job.request_changes = changes
     return job
+
+
+def _budget(asked: float, name: str, settings: Settings,
+            ignored: Callable[[str], None]) -> float:
+    """Return a request's time budget: as asked if positive, at least min_planning_time."""
+    budget = asked if 0.0 < asked < math.inf else settings.request.max_planning_time
+    if budget < settings.min_planning_time:
+        ignored(name)
+        budget = settings.min_planning_time
+    return float(budget)
+
+
+def ik_job(label: str, ik: Any, settings: Settings, future: Any,
+           ignored: Callable[[str], None]) -> Job:
+    """
+    Return the job of a PositionIKRequest: the tip link's pose, planned from the seed state.
+
+    Its answer is the joint goal the planner would move to (Refusal: why it is refused).
+    """
+    s = settings
+    if _has_constraints(ik.constraints):
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'constraints on an IK request are not '
+                                                  'offered: the pose is solved as given')
+    start = _start_state(ik.robot_state, s)
+    _check_link(ik.ik_link_name, s)
+    frame = _frame(ik.pose_stamped.header.frame_id, s)
+    p, o = ik.pose_stamped.pose.position, ik.pose_stamped.pose.orientation
+    q = (o.x, o.y, o.z, o.w)
+    problem = rotation_problem(q)
+    if problem:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
+    job = Job(label, (p.x, p.y, p.z), future=future, frame=frame, orientation=q,
+              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose')
+    timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
+    job.request_changes = {'mode': Mode.POSE,
+                           'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
+    if not ik.avoid_collisions:
+        job.request_changes['world'] = None
+    return job
+
+
+def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np.ndarray]:
+    """
+    Return the 4x4 poses of a GetPositionFK request's links in its frame (Refusal: why not).
+
+    The joint angles are the request's robot state's, those it does not name ``now``'s.
+    """
+    names, positions = list(request.robot_state.joint_state.name), list(
+        request.robot_state.joint_state.position)
+    if len(names) != len(positions):
+        raise Refusal('INVALID_ROBOT_STATE', f'robot_state has {len(names)} joint names and '
+                                             f'{len(positions)} positions')
+    angles = {**now, **dict(zip(names, map(float, positions)))}
+    frame = _frame(request.header.frame_id, settings)
+    into = np.linalg.inv(settings.frames.to_base(frame, angles))
+    poses = []
+    for link in request.fk_link_names:
+        problem = frame_problem(link, settings) if link else 'an empty link name'
+        if problem:
+            raise Refusal('INVALID_LINK_NAME', problem)
+        poses.append(into @ settings.frames.to_base(link, angles))
+    return poses
 
 
 def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,

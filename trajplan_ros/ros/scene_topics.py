@@ -18,14 +18,14 @@ from __future__ import annotations
 
 from typing import Iterable, TYPE_CHECKING
 
-from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+from geometry_msgs.msg import Vector3
 import numpy as np
 from std_msgs.msg import ColorRGBA, Header
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Obstacle, pose_matrix, Scene
 from trajplan_ros.collision.shapes import Shape
-from trajplan_ros.kinematics.rotations import quaternions
+from trajplan_ros.ros.messages import pose_msg
 from visualization_msgs.msg import Marker, MarkerArray
 
 if TYPE_CHECKING:
@@ -94,14 +94,6 @@ def _obstacle(marker: Marker, ident: str, base_frame: str) -> Obstacle:
     return Obstacle(ident, shape)
 
 
-def _pose(matrix: np.ndarray) -> Pose:
-    """Return a 4x4 transform as a Pose."""
-    x, y, z, w = (float(v) for v in quaternions(matrix[None, :3, :3])[0])
-    t = matrix[:3, 3]
-    return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])),
-                orientation=Quaternion(x=x, y=y, z=z, w=w))
-
-
 def _shape_marker(shape: Shape, header: Header, ns: str, ident: int,
                   colour: ColorRGBA) -> Marker:
     """Return the marker RViz draws for a box, sphere or cylinder."""
@@ -110,7 +102,7 @@ def _shape_marker(shape: Shape, header: Header, ns: str, ident: int,
                    'sphere': (Marker.SPHERE, (2 * d[0],) * 3),
                    'cylinder': (Marker.CYLINDER, (2 * d[-1], 2 * d[-1], d[0]))}[shape.kind]
     return Marker(header=header, ns=ns, id=ident, type=kind, action=Marker.ADD,
-                  pose=_pose(shape.pose), color=colour,
+                  pose=pose_msg(shape.pose), color=colour,
                   scale=Vector3(x=float(scale[0]), y=float(scale[1]), z=float(scale[2])))
 
 
