@@ -31,7 +31,12 @@ def main() -> None:
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
     for goal in spec['goals']:
-        trajectory = moveit2.plan(start_joint_state=spec['start'], timeout_sec=30.0, **goal)
+        # a request sent while discovery is still matching the service's reader is lost, and
+        # pymoveit2 says None as for a failed plan: a second try tells the two apart
+        for _ in range(2):
+            trajectory = moveit2.plan(start_joint_state=spec['start'], timeout_sec=30.0, **goal)
+            if trajectory is not None:
+                break
         print(json.dumps(None if trajectory is None else {
             'joint_names': list(trajectory.joint_names),
             'times': [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec

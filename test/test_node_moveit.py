@@ -22,6 +22,7 @@ from typing import Any, Callable, Iterator
 from node_under_test import ARM, NodeProcess
 import numpy as np
 import pytest
+from rclpy.parameter import Parameter
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.tools.bench.cases import PUBLISHED
@@ -108,6 +109,7 @@ def test_codes_say_why_a_goal_is_not_planned(move_group) -> None:
         'PLANNING_FAILED': {'position': REACHABLE, 'path_constraint': True},
         'INVALID_GOAL_CONSTRAINTS': {'position': REACHABLE, 'goals': 2},
         'INVALID_ROBOT_STATE': {'position': REACHABLE, 'start': {'joint1': 9.0}},
+        'TIMED_OUT': {'position': REACHABLE, 'planning_time': 1e-6},   # no search is that fast
     }
     answers = ask(move_group, *specs.values())
     for code, answer in zip(specs, answers):
@@ -236,7 +238,10 @@ def urdf_move_group(start_node: Callable[..., NodeProcess], env: dict[str, str],
                     published: Any, namespace: str) -> NodeProcess:
     """Run the node as move_group for a published arm from its URDF (parameters from a file)."""
     params = folder / 'params.yaml'
+    srdf = (f'<robot name="arm"><group name="arm"><chain base_link="{published.base_link}" '
+            f'tip_link="{published.tip_link}"/></group></robot>')
     params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'robot_description_semantic': srdf,
         'robot_description': published.urdf.read_text(encoding='utf-8'),
         'base_link': published.base_link, 'tip_link': published.tip_link,
         'moveit_interfaces': True, 'angular_velocity': 1.0,
@@ -282,6 +287,14 @@ def test_pymoveit2_picks_from_above_with_the_so101(so101_move_group, moveit_msgs
         {'joint_positions': joints}])                           # move_to_configuration's
     assert answer is not None and configured is not None, so101_move_group.output
     assert configured['positions'][-1] == joints
+    done = subprocess.run([sys.executable, str(CLIENT), f'{NS}_so101/plan_kinematic_path',
+                           json.dumps([{'position': goal[:3, 3].tolist(),
+                                        'group': 'manipulator'}])], env=moveit_msgs_env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-3000:]
+    unknown = json.loads(done.stdout)
+    assert unknown['code'] == 'INVALID_GROUP_NAME', unknown
+    assert unknown['message'] == "group 'manipulator' is not in the SRDF (groups: arm)"
     frame = arm.frames(np.array([answer['positions'][-1]]))[0, -1]
     assert np.linalg.norm(frame[:3, 3] - goal[:3, 3]) <= 0.001 + 1e-9
     assert float((frame[:3, :3] @ arm.tool_axis) @ goal[:3, 2]) >= math.cos(0.01) - 1e-9
@@ -344,7 +357,7 @@ def executing(start_node: Callable[..., NodeProcess], moveit_msgs_env: dict[str,
     assert controller.stop() == 0, controller.output
 
 
-def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> None:
+def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing, peer) -> None:
     node, env = executing
     specs = [{'position': list(REACHABLE), 'execute': 'run'},
              {'position': [0.2, -0.15, 0.1], 'execute': 'cancel'},     # 1.5 rad of joint1
@@ -356,7 +369,8 @@ def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> Non
     assert done.returncode == 0, done.stderr[-3000:]
     ran, cancelled, foreign, stopped = map(json.loads, done.stdout.splitlines())
     assert cancelled['code'] == 'SUCCESS', node.output
-    assert ran['code'] == 'SUCCESS' and ran['execution']['code'] == 'SUCCESS', ran
+    assert ran['code'] == 'SUCCESS' and ran['execution']['code'] == 'SUCCESS', (
+        ran['execution'], node.output)
     assert ran['execution']['status'] == 4                      # SUCCEEDED
     assert cancelled['execution']['code'] == 'PREEMPTED', cancelled
     assert cancelled['execution']['status'] == 5                # CANCELED
@@ -366,6 +380,18 @@ def test_a_planned_trajectory_is_executed_cancelled_or_refused(executing) -> Non
     assert stopped['execution']['code'] == 'PREEMPTED', stopped
     assert stopped['execution']['status'] == 6                  # ABORTED: not a cancel
     assert node.has('trajectory_execution_event stop: 1 executions cancelled')
+    told, = peer.set_parameters(f'{NS}_exec/demo_controller', [Parameter('fail',
+                                                                         value='reject')])
+    assert told.successful, told.reason
+    done = subprocess.run([sys.executable, str(CLIENT), f'{NS}_exec/plan_kinematic_path',
+                           json.dumps([{'joint_goal': {'joint1': 0.0}, 'execute': 'run'}])],
+                          env=env, capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rejected = json.loads(done.stdout)
+    assert rejected['execution']['code'] == 'CONTROL_FAILED', rejected
+    assert rejected['execution']['status'] == 6 and 'rejected' in rejected['execution']['message']
+    told, = peer.set_parameters(f'{NS}_exec/demo_controller', [Parameter('fail', value='')])
+    assert told.successful, told.reason
 
 
 def test_move_action_plans_then_executes_unless_plan_only(executing) -> None:
@@ -413,7 +439,7 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
     free, = scene_steps(ns, moveit_msgs_env, {'plan': {'position': REACHABLE}})
     there = dict(zip(ARM.joint_names, free['last']))
     (added, inside, joint, bad, foreign, moved, after_move, appended, scene, mesh,
-     in_mesh, acm, cleared, removed, again) = scene_steps(
+     in_mesh, post, blocked_start, acm, cleared, removed, again) = scene_steps(
         ns, moveit_msgs_env,
         {'publish': crate, 'expect': ['crate']},
         {'plan': {'position': REACHABLE}},
@@ -431,6 +457,10 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
         {'publish': {'id': 'part', 'frame': 'base_link', 'pose': list(REACHABLE),
                      'mesh': tetrahedron}, 'expect': ['crate', 'part']},
         {'plan': {'position': REACHABLE}},
+        {'publish': {'id': 'post', 'frame': 'base_link', 'pose': [0.0, 0.0, 0.1],
+                     'primitives': [['BOX', [0.03, 0.03, 0.03], [0.0, 0.0, 0.0]]]},
+         'expect': ['crate', 'part', 'post']},
+        {'plan': {'position': REACHABLE, 'start': {n: 0.0 for n in ARM.joint_names}}},
         {'apply': {'acm': True}},
         {'apply': {'is_diff': False, 'objects': [crate]}},
         {'publish': {'id': '', 'operation': 'REMOVE'}, 'expect': []},
@@ -453,6 +483,8 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
     assert scene['joints'] == list(ARM.joint_names)
     assert mesh['ids'] == ['crate', 'part']
     assert in_mesh['code'] == 'GOAL_IN_COLLISION' and 'part' in in_mesh['message'], in_mesh
+    assert blocked_start['code'] == 'START_STATE_IN_COLLISION', blocked_start
+    assert "the start is in collision: link2 with 'post'" in blocked_start['message']
     assert acm == {'success': False} and cleared == {'success': True}
     assert node.has('apply_planning_scene refused, scene kept: collision-matrix edits')
     assert removed['ids'] == [] and again['code'] == 'SUCCESS', again

@@ -34,7 +34,8 @@ from trajplan_ros.motion.motion_profile import Timing
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.motion.trajectory import motion_states
 
-__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'START_TOLERANCE', 'StartLimits']
+__all__ = ['Clearance', 'GRID_SWEEP', 'check_motion', 'colliding_pairs', 'START_TOLERANCE',
+           'StartLimits']
 
 #: Most any link point moves between two instants of the grid (m).
 GRID_SWEEP = 1e-3
@@ -267,6 +268,13 @@ def _blocked_at(world: CollisionWorld, poses: np.ndarray, limit: np.ndarray) -> 
         if value <= limit[p]:
             return p
     return None
+
+
+def colliding_pairs(world: CollisionWorld, q: np.ndarray) -> str:
+    """Return the pairs that touch or overlap at joint angles q, named ('' if none)."""
+    at = _clearances(world, world.arm.geometry.link_poses(q[None])[0],
+                     np.arange(len(world.pairs)))
+    return ', '.join(world.pair_name(p) for p in np.flatnonzero(at <= 0.0))
 
 
 def _clearances(world: CollisionWorld, poses: np.ndarray, which: np.ndarray) -> np.ndarray:

@@ -235,15 +235,18 @@ class ActionExecution:
         Send the waiting motion if the server is there, cancelling the ones it preempts.
 
         Unless its start is off the newest joint_states: then it is refused, and what executes
-        goes on.
+        goes on. A server whose joint_states have not come yet is waited for as a server is.
         """
         motion = self._waiting
         if motion is None or not self._client(motion.action).server_is_ready():
             return
-        self._waiting = None
         names = list(motion.goal)
-        problem = start_mismatch(names, motion.start, self._measured(names),
-                                 motion.start_tolerance)
+        measured = self._measured(names)
+        if (motion.start_tolerance > 0 and len(measured) < len(names)
+                and time.monotonic() <= motion.deadline):
+            return                     # the controller's first joint_states are on their way
+        self._waiting = None
+        problem = start_mismatch(names, motion.start, measured, motion.start_tolerance)
         if problem:
             self._end(motion, 'refused', f'not sent: {problem}')
             return

@@ -15,6 +15,7 @@ from typing import Callable, Sequence
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import Header
+from trajplan_ros.collision.free_motion import colliding_pairs
 from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
 from trajplan_ros.planning import Mode, plan, PlanRequest, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.planning.planner import describe_goal
@@ -56,6 +57,7 @@ class Outcome:
     via_points: int | None = None            # via points of a published trajectory
     start: np.ndarray | None = None          # the joint angles it was planned from
     result: PlanResult | None = None         # the planning core's result, if it planned
+    start_collides: str = ''                 # the pairs in collision at a refused start
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
@@ -139,6 +141,12 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     else:
         what = f'{job.label} {describe_goal(job.goal)} m{moved}'
     where = f'{what} from q = {describe_goal(start.q)} rad{start.describe()}'
+    touching = (colliding_pairs(s.world, start.q)
+                if job.start_must_be_free and s.world is not None else '')
+    if touching:
+        reason = f'the start is in collision: {touching}'
+        return Outcome(False, f'{where}: refused: {reason}', 'refused', reason, start=start.q,
+                       start_collides=touching)
     result = plan(_pointed(request, rotation, goal_orientation(job, s)), stop=stop)
     if job.joint_goal and result.joint_goal is not None:
         job.goal = tuple(result.goal.tolist())           # the tool point there, for the log

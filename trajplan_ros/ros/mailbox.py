@@ -51,6 +51,7 @@ class Job:
     #: a joint goal instead of ``goal``: angles by joint name (the others keep their start)
     joint_goal: Mapping[str, float] = field(default_factory=dict)
     answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)
+    start_must_be_free: bool = False         # refused if the start collides (MoveIt's rule)
     ended: tuple[str, str] = ('', '')        # its first outcome on plan_results: status, reason
     queued_at: float = field(default_factory=time.monotonic)
     answered: bool = False

@@ -124,6 +124,7 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
     changes['max_planning_time'] = _budget(request.allowed_planning_time, 'allowed_planning_time',
                                            s, ignored)
     job.request_changes = changes
+    job.start_must_be_free = True
     return job
 
 
@@ -157,7 +158,8 @@ def ik_job(label: str, ik: Any, settings: Settings, future: Any,
     if problem:
         raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
     job = Job(label, (p.x, p.y, p.z), future=future, frame=frame, orientation=q,
-              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose')
+              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose',
+              start_must_be_free=ik.avoid_collisions)
     timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
     job.request_changes = {'mode': Mode.POSE,
                            'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
@@ -372,6 +374,8 @@ def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
         return ('PREEMPTED' if status == 'shut_down' else 'PLANNING_FAILED'), reason
     if outcome.succeeded:
         return 'SUCCESS', outcome.reason
+    if outcome.start_collides:
+        return 'START_STATE_IN_COLLISION', outcome.reason
     result = outcome.result
     status = result.status if result is not None else None
     if status is PlanStatus.TIMED_OUT:
