@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+import re
 import subprocess
 import sys
 from typing import Any, Callable, Iterator
@@ -86,6 +87,19 @@ def test_a_larger_sphere_is_a_region_the_plan_moves_into_faster(move_group) -> N
     assert large['times'][-1] < small['times'][-1]            # the least time into the region
 
 
+def test_of_several_goal_regions_the_fastest_to_move_into_is_planned(move_group) -> None:
+    far = (0.2, -0.15, 0.1)
+    alone_far, alone_near, both, unreachable_first = ask(
+        move_group, {'position': far}, {'position': REACHABLE},
+        {'position': far, 'regions': [REACHABLE]},
+        {'position': OUT_OF_REACH, 'regions': [far]})
+    faster, slower = sorted((alone_far, alone_near), key=lambda a: a['times'][-1])
+    assert faster['times'][-1] < slower['times'][-1]
+    assert both['code'] == 'SUCCESS' and both['positions'] == faster['positions'], both
+    assert unreachable_first['code'] == 'SUCCESS'
+    assert unreachable_first['positions'] == alone_far['positions']
+
+
 def test_an_approach_goal_free_about_z_points_the_tool_axis(move_group) -> None:
     q = np.array([-0.4, 0.5, 0.9, 0.3, 0.0])                    # a tool pose the arm takes
     goal = ARM.frames(q[None])[0, -1]
@@ -107,7 +121,7 @@ def test_codes_say_why_a_goal_is_not_planned(move_group) -> None:
         'INVALID_LINK_NAME': {'position': REACHABLE, 'link': 'no_such_link'},
         'FRAME_TRANSFORM_FAILURE': {'position': REACHABLE, 'frame': 'camera_link'},
         'PLANNING_FAILED': {'position': REACHABLE, 'path_constraint': True},
-        'INVALID_GOAL_CONSTRAINTS': {'position': REACHABLE, 'goals': 2},
+        'INVALID_GOAL_CONSTRAINTS': {'position': REACHABLE, 'box': [0.1, 0.1]},
         'INVALID_ROBOT_STATE': {'position': REACHABLE, 'start': {'joint1': 9.0}},
         'TIMED_OUT': {'position': REACHABLE, 'planning_time': 1e-6},   # no search is that fast
     }
@@ -337,6 +351,14 @@ def test_the_bench_measures_round_trips_beside_the_plan(moveit_msgs_env) -> None
     assert 'plan_kinematic_path: 3 requests (the paper arm, a sphere of 0.001 m), 3 SUCCESS' \
         in done.stdout, done.stdout
     assert 'target: median overhead <= 2 x the empty call' in done.stdout
+    done = subprocess.run([sys.executable, '-m', 'trajplan_ros.tools.bench_moveit', '--quality',
+                           '--calls', '2', '--radius', '0.01'], env=moveit_msgs_env,
+                          capture_output=True, text=True, timeout=300,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert done.returncode in (0, 1), done.stderr[-3000:]
+    assert ('plan_kinematic_path: 2 held-out region goals (the paper arm, spheres of 0.01 m), '
+            '2 SUCCESS') in done.stdout, done.stdout
+    assert 'target: >= 99 % within 0.1 %' in done.stdout
 
 
 @pytest.fixture(scope='module')
@@ -488,3 +510,20 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
     assert acm == {'success': False} and cleared == {'success': True}
     assert node.has('apply_planning_scene refused, scene kept: collision-matrix edits')
     assert removed['ids'] == [] and again['code'] == 'SUCCESS', again
+
+
+def test_the_readme_pymoveit2_block_runs_as_pasted(start_node, moveit_msgs_env) -> None:
+    readme = (Path(__file__).resolve().parents[1] / 'README.md').read_text(encoding='utf-8')
+    tag = 'needs moveit_msgs built (test_node_moveit runs this block against the node)'
+    block = readme.split(tag, 1)[1].split('```python\n', 1)[1].split('```', 1)[0]
+    ns = f'{NS}_readme'
+    node = start_node('-r', f'__ns:={ns}', '-r', '__node:=move_group', '-p',
+                      'moveit_interfaces:=true', '-p', 'min_planning_time:=30.0', ready=False,
+                      env=moveit_msgs_env)
+    node.wait_for(r'move_group\]: ready: ')
+    done = subprocess.run([sys.executable, '-c', block, '--ros-args', '-r', f'__ns:={ns}'],
+                          env=moveit_msgs_env, capture_output=True, text=True, timeout=120)
+    assert node.stop() == 0, node.output
+    assert done.returncode == 0, done.stderr[-3000:]
+    points, seconds = re.fullmatch(r'(\d+) points, (\d+) s\n', done.stdout).groups()
+    assert int(points) > 2, done.stdout

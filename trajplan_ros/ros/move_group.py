@@ -112,18 +112,23 @@ class MoveGroupServer:
         return response
 
     async def _plan(self, kind: str, asked: Any, response: Any) -> str:
-        """Plan a MotionPlanRequest into a MotionPlanResponse; return the code's name."""
+        """
+        Plan a MotionPlanRequest into a MotionPlanResponse; return the code's name.
+
+        Each goal region is planned as a call of its own, in turn; the fastest answers.
+        """
         s = self._hooks.settings()
         label = f'{kind} #{next(self._hooks.call_ids)}'
         try:
-            job = moveit.goal_job(label, asked, s, self._hooks.semantic(), Future(),
-                                  self._say_ignored)
-            problem = None
+            jobs = moveit.goal_jobs(label, asked, s, self._hooks.semantic(), self._say_ignored)
         except moveit.Refusal as exc:
-            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
-        outcome = await self._hooks.queue_call(job, problem and str(problem))
-        code = (problem.code, str(problem)) if problem else moveit.error_code(outcome, job)
-        moveit.fill_response(response, outcome, code, s, asked.group_name,
+            await self._hooks.queue_call(Job(label, (math.nan,) * 3, future=Future()), str(exc))
+            moveit.fill_response(response, None, (exc.code, str(exc)), s, asked.group_name,
+                                 self._hooks.header(s.base_frame), self._codes)
+            return exc.code
+        outcomes = [await self._hooks.queue_call(job, None) for job in jobs]
+        best, code = moveit.fastest(outcomes, jobs)
+        moveit.fill_response(response, outcomes[best], code, s, asked.group_name,
                              self._hooks.header(s.base_frame), self._codes)
         return code[0]
 
@@ -140,7 +145,7 @@ class MoveGroupServer:
         label = f'compute_ik call #{next(self._hooks.call_ids)}'
         ik = request.ik_request
         try:
-            job = moveit.ik_job(label, ik, s, Future(), self._say_ignored)
+            job = moveit.ik_job(label, ik, s, self._say_ignored)
             problem = None
         except moveit.Refusal as exc:
             job, problem = Job(label, (math.nan,) * 3, future=Future()), exc

@@ -1,24 +1,23 @@
 # Copyright 2026 The trajplan_ros Authors
 # SPDX-License-Identifier: Apache-2.0
 """
-move_group's planning service, for MoveIt's clients (pymoveit2, MoveGroupInterface).
+move_group's requests and answers, translated to and from the node's jobs (no node here).
 
-With the parameter ``moveit_interfaces`` the node serves ``plan_kinematic_path``
-(moveit_msgs/srv/GetMotionPlan) beside its own interfaces. A request becomes one of the node's
-jobs (``goal_job``), planned in turn with the other calls; its outcome becomes the response
-(``fill_response``): the joint trajectory from the start, and a MoveItErrorCodes whose message
-is the planner's reason.
+A MotionPlanRequest becomes one job per goal region (``goal_jobs``), planned in turn with the
+node's other calls; the fastest region's outcome becomes the response (``fastest``,
+``fill_response``): the joint trajectory from the start, and a MoveItErrorCodes whose message
+is the planner's reason. ``ik_job`` and ``fk_poses`` serve compute_ik and compute_fk;
+``execution_motion`` an ExecuteTrajectory goal.
 
-A goal is one ``Constraints`` with a PositionConstraint on the tip link: the region (a sphere,
+A region is one ``Constraints``: a PositionConstraint on the tip link, whose region (a sphere,
 or a box's inscribed sphere) is the position tolerance, and the plan is the least-time motion
 into it, not to its centre (``search.region``). An OrientationConstraint beside it makes the
 goal a pose (its least tolerance the orientation tolerance), or, with the z tolerance pi or
 more, an approach goal (the tool's z axis within the lesser of the x and y tolerances of the
-orientation's z axis); all three pi or more: position only. A goal of JointConstraints is a
+orientation's z axis); all three pi or more: position only. JointConstraints instead are a
 joint goal: the motion to those angles (``PlanRequest.joint_goal``). What a direct motion
-cannot promise (path constraints, visibility constraints, several goal regions) is refused
-with the reason, never ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how
-to get it.
+cannot promise (path constraints, visibility constraints) is refused with the reason, never
+ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how to get it.
 """
 from __future__ import annotations
 
@@ -28,6 +27,7 @@ from typing import Any, Callable
 
 from defusedxml import ElementTree
 import numpy as np
+from rclpy.task import Future
 from trajplan_ros.planning import Mode, PlanStatus
 from trajplan_ros.ros.execution import Motion
 from trajplan_ros.ros.job import frame_problem, Outcome, rotation_problem
@@ -36,7 +36,8 @@ from trajplan_ros.ros.messages import trajectory_msg
 from trajplan_ros.ros.settings import Settings
 
 __all__ = ['EXECUTION_CODES', 'HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'execution_motion',
-           'fill_response', 'fk_poses', 'goal_job', 'ik_job', 'moveit_types', 'srdf_groups']
+           'fastest', 'fill_response', 'fk_poses', 'goal_jobs', 'ik_job', 'moveit_types',
+           'srdf_groups']
 
 #: The error code's source, as move_group names its own.
 SOURCE = 'trajplan_ros'
@@ -82,14 +83,15 @@ def srdf_groups(srdf: str) -> tuple[str, ...]:
     return tuple(g.get('name', '') for g in root.iter('group'))
 
 
-def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: Any,
-             ignored: Callable[[str], None]) -> Job:
+def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
+              ignored: Callable[[str], None]) -> list[Job]:
     """
-    Return the job of a MotionPlanRequest (Refusal: why and with which code it is refused).
+    Return the jobs of a MotionPlanRequest, one per goal region (Refusal: why, and the code).
 
     ``srdf``: the semantic description in use (its groups name the group); ``ignored`` is told
     each of MoveIt's planner-choosing fields that is set (``IGNORED``), and
-    ``allowed_planning_time`` where ``min_planning_time`` raises it.
+    ``allowed_planning_time`` where ``min_planning_time`` raises it. Each job is a call with a
+    future of its own; the fastest region's plan is the answer (``fastest``).
     """
     s = settings
     groups = srdf_groups(srdf)
@@ -104,28 +106,45 @@ def goal_job(label: str, request: Any, settings: Settings, srdf: str, future: An
     if _has_constraints(request.path_constraints):
         raise Refusal('PLANNING_FAILED', 'path constraints are not offered: a direct motion '
                                          'cannot promise them along the way')
-    if len(request.goal_constraints) != 1:
-        raise Refusal('INVALID_GOAL_CONSTRAINTS',
-                      f'{len(request.goal_constraints)} goal regions given; one is planned')
-    goal = request.goal_constraints[0]
-    if goal.visibility_constraints:
-        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
+    if not request.goal_constraints:
+        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'no goal constraints given')
     start = _start_state(request.start_state, s)
-    if goal.joint_constraints:
-        job = _joint_goal_job(label, goal, s, future, start)
-        changes: dict[str, Any] = {'mode': Mode.POSE}           # every joint moves
-    else:
-        job, changes = _tip_goal_job(label, goal, s, future, start)
     scale = {f'{kind}_scaling': factor for kind, factor in (
         ('velocity', request.max_velocity_scaling_factor),
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
-    if scale:                                 # MoveIt's rule: any other factor means 1
-        changes['motion'] = dataclasses.replace(s.request.motion, **scale)
-    changes['max_planning_time'] = _budget(request.allowed_planning_time, 'allowed_planning_time',
-                                           s, ignored)
-    job.request_changes = changes
-    job.start_must_be_free = True
-    return job
+    budget = _budget(request.allowed_planning_time, 'allowed_planning_time', s, ignored)
+    count = len(request.goal_constraints)
+    jobs = []
+    for k, goal in enumerate(request.goal_constraints):
+        named = label if count == 1 else f'{label} region {k + 1}/{count}'
+        if goal.visibility_constraints:
+            raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
+        if goal.joint_constraints:
+            job = _joint_goal_job(named, goal, s, Future(), start)
+            changes: dict[str, Any] = {'mode': Mode.POSE}           # every joint moves
+        else:
+            job, changes = _tip_goal_job(named, goal, s, Future(), start)
+        if scale:                                 # MoveIt's rule: any other factor means 1
+            changes['motion'] = dataclasses.replace(s.request.motion, **scale)
+        changes['max_planning_time'] = budget
+        job.request_changes = changes
+        job.start_must_be_free = True
+        jobs.append(job)
+    return jobs
+
+
+def fastest(outcomes: list[Outcome | None], jobs: list[Job]) -> tuple[int, tuple[str, str]]:
+    """
+    Return which region's outcome answers a request, and its code: the least motion time.
+
+    With no region planned, the first region's code (``error_code``).
+    """
+    codes = [error_code(outcome, job) for outcome, job in zip(outcomes, jobs)]
+    done = [k for k, code in enumerate(codes) if code[0] == 'SUCCESS']
+    if not done:
+        return 0, codes[0]
+    best = min(done, key=lambda k: outcomes[k].result.motion_time_s)
+    return best, codes[best]
 
 
 def _budget(asked: float, name: str, settings: Settings,
@@ -138,8 +157,7 @@ def _budget(asked: float, name: str, settings: Settings,
     return float(budget)
 
 
-def ik_job(label: str, ik: Any, settings: Settings, future: Any,
-           ignored: Callable[[str], None]) -> Job:
+def ik_job(label: str, ik: Any, settings: Settings, ignored: Callable[[str], None]) -> Job:
     """
     Return the job of a PositionIKRequest: the tip link's pose, planned from the seed state.
 
@@ -157,7 +175,7 @@ def ik_job(label: str, ik: Any, settings: Settings, future: Any,
     problem = rotation_problem(q)
     if problem:
         raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
-    job = Job(label, (p.x, p.y, p.z), future=future, frame=frame, orientation=q,
+    job = Job(label, (p.x, p.y, p.z), future=Future(), frame=frame, orientation=q,
               plan_only=True, start_state=start, answer_path=False, goal_orientation='pose',
               start_must_be_free=ik.avoid_collisions)
     timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
