@@ -215,3 +215,14 @@ def test_a_profile_plans_its_duration_and_publishes_its_derivatives(tmp_path, ca
     assert all(len(p['accelerations']) == 5 for p in record['trajectory']['points'])
     assert main(['plan', *TARGET, '--profile', 'trapezoidal', '--max-acceleration', '0.5']) == 0
     assert 's (trapezoidal, independent), position error' in capsys.readouterr().out
+
+
+def test_plan_a_joint_goal(capsys):
+    assert main(['plan', '--joint-goal', '0.5', '-0.3', '0.4', '0.2', '0.1', '--json']) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record['status'] == 'succeeded' and record['joint_goal'] == [0.5, -0.3, 0.4, 0.2, 0.1]
+    assert record['message'] == 'reached the joint goal in 2.5000 s of motion'
+    assert main(['plan', '--joint-goal', '5', '0', '0', '0', '0']) == 1
+    assert 'rejected: joint goal joint1 = 5 rad is outside its limits' in capsys.readouterr().out
+    assert main(['plan', '0.1', '0.1', '0.1', '--joint-goal', '0', '0', '0', '0', '0']) == 2
+    assert '--joint-goal Q..., one of them' in capsys.readouterr().err

@@ -280,8 +280,9 @@ def _to_joint_goal(r: PlanRequest, clock: float, interrupt: Interrupt | None,
                         start_margin=r.start_limit_margin)
         common.update(goal=obj.goal, joint_names=tuple(arm.joint_names),
                       law=r.motion.time_law(arm, r.angular_velocity))
-    except InvalidRequest as exc:
-        return PlanResult(PlanStatus.REJECTED, str(exc), start=None, **common)
+    except InvalidRequest as exc:                # no tool point to name as the goal
+        return PlanResult(PlanStatus.REJECTED, str(exc), start=None,
+                          **{**common, 'goal': np.full(3, np.nan)})
     duration = float(obj.motion_time(q[None])[0])
     result = PlanResult(PlanStatus.SUCCEEDED, f'reached the joint goal in {duration:.4f} s of '
                         'motion', start=obj.start.copy(), joint_goal=q, position_error_m=0.0,

@@ -43,6 +43,9 @@ def _add_plan(sub: argparse._SubParsersAction) -> None:
                         "names for chain order); '-' for stdin")
     p.add_argument('--start', nargs='+', type=finite_number, metavar='Q',
                    help='start joint angles in radians (default: upright, all zero)')
+    p.add_argument('--joint-goal', nargs='+', type=finite_number, metavar='Q',
+                   help='plan the motion to these joint angles (radians) instead of a tool '
+                        'position: direct, or around the --scene through via points')
     p.add_argument('--mode', choices=[m.value for m in Mode],
                    help='free (position only), radial (eq. 12-13), approach (the tool axis '
                         'along --approach) or pose (the tool frame at --orientation); default '
@@ -279,6 +282,13 @@ def _run_plan(args: argparse.Namespace) -> int:
                                                            flush=True))
     if kernels.compiled:                                   # the first run after an install
         print(f'trajplan: {kernels.describe()}', file=sys.stderr)
+    if args.joint_goal is not None:
+        if args.xyz or args.goals is not None:
+            raise UsageError('give X Y Z, --goals FILE or --joint-goal Q..., one of them')
+        start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
+        result = plan(request.replace(joint_goal=args.joint_goal, start=start))
+        print(_line(result, None, arm, args))
+        return 0 if result.success else 1
     if args.goals is None:
         if len(args.xyz) != 3:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
