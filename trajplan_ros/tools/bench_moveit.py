@@ -159,8 +159,10 @@ def _quality(cases: Sequence[ChainCase], calls: Calls, arm_name: str, radius: fl
                      for m, c in zip(calls.motions, cases)])
     within = float(np.mean(gaps <= SUCCESS_GAP))
     met = within >= QUALITY_TARGET
+    others = sorted({c for c in calls.codes if c != 1})
+    failed = ''.join(f', {calls.codes.count(c)} with code {c}' for c in others)
     print(f'plan_kinematic_path: {len(cases)} held-out region goals ({arm_name}, spheres of '
-          f'{radius:g} m), {calls.codes.count(1)} SUCCESS')
+          f'{radius:g} m), {calls.codes.count(1)} SUCCESS{failed}')
     print(f'  within {100 * SUCCESS_GAP:g} % of the region reference: {100 * within:.1f} %; '
           f'median gap {100 * float(np.median(gaps)):+.3f} %, worst '
           f'{100 * float(np.max(gaps)):+.2f} %')
