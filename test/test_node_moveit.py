@@ -460,7 +460,7 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
                     [0.0, 0.0, 0.06]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]]
     free, = scene_steps(ns, moveit_msgs_env, {'plan': {'position': REACHABLE}})
     there = dict(zip(ARM.joint_names, free['last']))
-    (added, inside, joint, bad, foreign, moved, after_move, appended, scene, mesh,
+    (added, inside, joint, bad, foreign, moved, after_move, appended, scene, twice, mesh,
      in_mesh, post, blocked_start, acm, cleared, removed, again) = scene_steps(
         ns, moveit_msgs_env,
         {'publish': crate, 'expect': ['crate']},
@@ -476,6 +476,7 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
                                                   ['CYLINDER', [0.1, 0.02], [0.1, 0, 0]]]},
          'expect': ['crate']},
         {'scene': True},
+        {'publish': {**crate, 'id': 'crate#1'}, 'expect': ['crate']},   # a shape's id twice
         {'publish': {'id': 'part', 'frame': 'base_link', 'pose': list(REACHABLE),
                      'mesh': tetrahedron}, 'expect': ['crate', 'part']},
         {'plan': {'position': REACHABLE}},
@@ -503,6 +504,9 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
     assert scene['objects'] == [{'id': 'crate', 'frame': 'base_link', 'primitives': [1, 4, 3],
                                  'meshes': 0}]
     assert scene['joints'] == list(ARM.joint_names)
+    assert twice['ids'] == ['crate']
+    assert node.has(r"collision_object refused, scene kept: obstacle ids must be unique: "
+                    r"\['crate#1'\] repeat")
     assert mesh['ids'] == ['crate', 'part']
     assert in_mesh['code'] == 'GOAL_IN_COLLISION' and 'part' in in_mesh['message'], in_mesh
     assert blocked_start['code'] == 'START_STATE_IN_COLLISION', blocked_start

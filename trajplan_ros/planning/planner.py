@@ -304,8 +304,9 @@ def _checked_joint_goal(arm: ArmModel, joint_goal: np.ndarray, start: np.ndarray
         q = arm.full_start(joint_goal)
     except ValueError as exc:
         raise InvalidRequest(str(exc).replace('a start', 'a joint goal')) from None
-    if joint_goal.size < arm.n_joints:
-        q[joint_goal.size:] = arm.full_start(start)[joint_goal.size:]
+    if joint_goal.size < arm.n_joints:        # the held ones where they are, inside the limits
+        q[joint_goal.size:] = np.clip(arm.full_start(start), arm.lower, arm.upper)[
+            joint_goal.size:]
     if not np.all(np.isfinite(q)):
         raise InvalidRequest(f'joint goal has a non-finite angle: {q.tolist()}')
     outside = np.flatnonzero((q < arm.lower - 1e-9) | (q > arm.upper + 1e-9))

@@ -23,10 +23,10 @@ from typing import Any, Callable
 
 import numpy as np
 from trajplan_ros.collision.errors import InvalidCollisionInput
-from trajplan_ros.collision.scene import Obstacle, pose_matrix
+from trajplan_ros.collision.scene import Obstacle
 from trajplan_ros.collision.shapes import MAX_MESH_VERTICES, Shape
 from trajplan_ros.kinematics.lazy_modules import lazy
-from trajplan_ros.ros.messages import pose_msg
+from trajplan_ros.ros.messages import pose_matrix_of, pose_msg
 
 trimesh = lazy('trimesh')
 
@@ -45,11 +45,23 @@ class PlacedObject:
     msg: Any
     frame_pose: np.ndarray
 
+    def in_base(self, base_frame: str) -> Any:
+        """Return the object as an ADD in the base frame, where it was placed."""
+        out = copy.deepcopy(self.msg)
+        out.operation, out.header.frame_id = out.ADD, base_frame
+        out.pose = pose_msg(self.frame_pose @ pose_matrix_of(self.msg.pose, 'object'))
+        return out
+
     def obstacles(self) -> list[Obstacle]:
         """Return the object's shapes as obstacles in the base frame."""
         o = self.msg
         where = f"collision object '{o.id}'"
-        placed = self.frame_pose @ _pose(o.pose, where)
+        for shapes, poses, kind in ((o.primitives, o.primitive_poses, 'primitive'),
+                                    (o.meshes, o.mesh_poses, 'mesh')):
+            if len(poses) > len(shapes):
+                raise InvalidCollisionInput(f'{where}: {len(poses)} {kind} poses for '
+                                            f'{len(shapes)} {kind}s')
+        placed = self.frame_pose @ pose_matrix_of(o.pose, where)
         shapes = [_primitive(p, placed @ _pose_at(o.primitive_poses, i, where), f'{where} '
                              f'primitive {i + 1}') for i, p in enumerate(o.primitives)]
         shapes += [_mesh(m, placed @ _pose_at(o.mesh_poses, i, where), f'{where} mesh {i + 1}')
@@ -112,8 +124,8 @@ class MoveItObjects:
 def _appended(placed: PlacedObject, msg: Any, frame_pose: np.ndarray) -> PlacedObject:
     """Return ``placed`` with the shapes of ``msg`` added, placed where ``msg`` places them."""
     out = copy.deepcopy(placed.msg)
-    into = np.linalg.inv(placed.frame_pose @ _pose(out.pose, 'object')) @ frame_pose @ _pose(
-        msg.pose, 'object')
+    into = (np.linalg.inv(placed.frame_pose @ pose_matrix_of(out.pose, 'object'))
+            @ frame_pose @ pose_matrix_of(msg.pose, 'object'))
     for shapes, poses, new, new_poses in (
             (out.primitives, out.primitive_poses, msg.primitives, msg.primitive_poses),
             (out.meshes, out.mesh_poses, msg.meshes, msg.mesh_poses)):
@@ -125,22 +137,16 @@ def _appended(placed: PlacedObject, msg: Any, frame_pose: np.ndarray) -> PlacedO
     return PlacedObject(out, placed.frame_pose)
 
 
-def _frame_pose(frame: str, to_base: Callable[[str], np.ndarray], where: str) -> np.ndarray:
+def _frame_pose(frame: str, to_base: Callable[[str], np.ndarray], where: str
+                ) -> np.ndarray:
     try:
         return to_base(frame)
     except ValueError as exc:
         raise InvalidCollisionInput(f'{where}: {exc}') from None
 
 
-def _pose(pose: Any, where: str) -> np.ndarray:
-    """Return a geometry_msgs/Pose as 4x4 (a zero quaternion: no rotation)."""
-    p, o = pose.position, pose.orientation
-    q = (o.x, o.y, o.z, o.w) if (o.x, o.y, o.z, o.w) != (0, 0, 0, 0) else (0, 0, 0, 1)
-    return pose_matrix((p.x, p.y, p.z), q, where)
-
-
 def _pose_at(poses: Any, i: int, where: str) -> np.ndarray:
-    return _pose(poses[i], where) if i < len(poses) else np.eye(4)
+    return pose_matrix_of(poses[i], where) if i < len(poses) else np.eye(4)
 
 
 def _primitive(primitive: Any, pose: np.ndarray, where: str) -> Shape:

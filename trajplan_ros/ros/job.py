@@ -133,7 +133,7 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
                                 tolerance=job.tolerance or s.request.tolerance,
                                 **job.request_changes)
     if job.joint_goal:
-        q = start.q.copy()
+        q = np.clip(start.q, s.arm.lower, s.arm.upper)   # joints not named: where they are
         for name, angle in job.joint_goal.items():
             q[s.arm.joint_names.index(name)] = angle
         request = request.replace(joint_goal=q)

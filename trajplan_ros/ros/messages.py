@@ -10,12 +10,13 @@ from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajplan_ros.collision.scene import pose_matrix
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.kinematics.rotations import quaternions
 from trajplan_ros.planning import Trajectory
 
 
-__all__ = ['path_msg', 'pose_msg', 'trajectory_msg']
+__all__ = ['path_msg', 'pose_matrix_of', 'pose_msg', 'trajectory_msg']
 
 
 def trajectory_msg(traj: Trajectory) -> JointTrajectory:
@@ -59,3 +60,14 @@ def pose_msg(matrix: np.ndarray) -> Pose:
     t = matrix[:3, 3]
     return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])),
                 orientation=Quaternion(x=x, y=y, z=z, w=w))
+
+
+def pose_matrix_of(pose: Pose, where: str) -> np.ndarray:
+    """
+    Return a geometry_msgs/Pose as 4x4 (InvalidCollisionInput: not a pose; ``where`` names it).
+
+    A zero quaternion, a message's default as RViz and MoveIt's clients leave it, is no rotation.
+    """
+    p, o = pose.position, pose.orientation
+    q = (o.x, o.y, o.z, o.w) if (o.x, o.y, o.z, o.w) != (0, 0, 0, 0) else (0, 0, 0, 1)
+    return pose_matrix((p.x, p.y, p.z), q, where)

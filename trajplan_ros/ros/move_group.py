@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import itertools
 import math
+import time
 from typing import Any, Awaitable, Callable
 
 from geometry_msgs.msg import PoseStamped
@@ -29,7 +30,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.task import Future
 from std_msgs.msg import Header, String
-from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Obstacle
 from trajplan_ros.ros import moveit_interfaces as moveit
 from trajplan_ros.ros.collision_objects import MoveItObjects
@@ -111,32 +111,47 @@ class MoveGroupServer:
                          response.motion_plan_response)
         return response
 
-    async def _plan(self, kind: str, asked: Any, response: Any) -> str:
+    async def _plan(self, kind: str, asked: Any, response: Any,
+                    cancelled: Callable[[], bool] = lambda: False) -> str:
         """
         Plan a MotionPlanRequest into a MotionPlanResponse; return the code's name.
 
-        Each goal region is planned as a call of its own, in turn; the fastest answers.
+        Each goal region is planned as a call of its own, in turn, within what is left of
+        ``allowed_planning_time``, until ``cancelled``; the fastest answers.
         """
         s = self._hooks.settings()
         label = f'{kind} #{next(self._hooks.call_ids)}'
         try:
             jobs = moveit.goal_jobs(label, asked, s, self._hooks.semantic(), self._say_ignored)
         except moveit.Refusal as exc:
-            await self._hooks.queue_call(Job(label, (math.nan,) * 3, future=Future()), str(exc))
+            await self._refuse(label, exc)
             moveit.fill_response(response, None, (exc.code, str(exc)), s, asked.group_name,
                                  self._hooks.header(s.base_frame), self._codes)
             return exc.code
-        outcomes = [await self._hooks.queue_call(job, None) for job in jobs]
-        best, code = moveit.fastest(outcomes, jobs)
+        budget = jobs[0].request_changes['max_planning_time']      # for all of them
+        deadline, outcomes = time.monotonic() + budget, []
+        for job in jobs:
+            left = deadline - time.monotonic()
+            if outcomes and (left <= 0.0 or cancelled()):
+                break                        # the regions planned so far answer
+            job.request_changes = {**job.request_changes, 'max_planning_time': max(left, 1e-3)}
+            outcomes.append(await self._hooks.queue_call(job, None))
+        best, code = moveit.fastest(outcomes, jobs[:len(outcomes)])
         moveit.fill_response(response, outcomes[best], code, s, asked.group_name,
                              self._hooks.header(s.base_frame), self._codes)
         return code[0]
+
+    async def _refuse(self, label: str, refusal: moveit.Refusal) -> None:
+        """Count and report a refused request as the node does its calls."""
+        await self._hooks.queue_call(Job(label, (math.nan,) * 3, future=Future()), str(refusal))
 
     def _say_ignored(self, field: str) -> None:
         if field not in self._said:
             self._said.add(field)
             why = ('raised to min_planning_time' if field in ('allowed_planning_time', 'timeout')
-                   else 'ignored (one planner: this one)')
+                   else 'ignored: give world objects on collision_object'
+                   if field.endswith('planning_scene_diff') else
+                   'ignored (one planner: this one)')
             self._node.get_logger().info(f'{field} is {why}; said once')
 
     async def _on_ik(self, request: Any, response: Any) -> Any:
@@ -145,13 +160,13 @@ class MoveGroupServer:
         label = f'compute_ik call #{next(self._hooks.call_ids)}'
         ik = request.ik_request
         try:
-            job = moveit.ik_job(label, ik, s, self._say_ignored)
-            problem = None
+            job = moveit.ik_job(label, ik, s, self._hooks.semantic(), self._say_ignored)
         except moveit.Refusal as exc:
-            job, problem = Job(label, (math.nan,) * 3, future=Future()), exc
-        outcome = await self._hooks.queue_call(job, problem and str(problem))
-        name, message = (problem.code, str(problem)) if problem else moveit.error_code(
-            outcome, job)
+            await self._refuse(label, exc)
+            response.error_code = self._code(exc.code, str(exc))
+            return response
+        outcome = await self._hooks.queue_call(job, None)
+        name, message = moveit.error_code(outcome, job)
         if name in ('GOAL_CONSTRAINTS_VIOLATED', 'PLANNING_FAILED'):
             name = 'NO_IK_SOLUTION'          # no pose there, or none the arm moves to freely
         response.error_code = self._code(name, message)
@@ -201,8 +216,12 @@ class MoveGroupServer:
         """Plan a MoveGroup goal, then execute it unless it is plan only; end it so."""
         feedback = self._move_type.Feedback
         goal.publish_feedback(feedback(state='PLANNING'))
+        diff = goal.request.planning_options.planning_scene_diff
+        if diff.world.collision_objects or diff.robot_state.attached_collision_objects:
+            self._say_ignored('planning_options.planning_scene_diff')   # send them on topics
         planned = self._msg.MotionPlanResponse()
-        name = await self._plan('move_action goal', goal.request.request, planned)
+        name = await self._plan('move_action goal', goal.request.request, planned,
+                                lambda: goal.is_cancel_requested)
         result = self._move_type.Result(
             error_code=planned.error_code, trajectory_start=planned.trajectory_start,
             planned_trajectory=planned.trajectory, planning_time=planned.planning_time)
@@ -295,9 +314,10 @@ class MoveGroupServer:
                 self._objects.objects = {}
             objects = self._objects.apply(messages, lambda f: s.frames.to_base(f, angles))
             checked = self._hooks.use_objects(self._objects.obstacles(objects))
-        except (InvalidCollisionInput, ValueError) as exc:
+        except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
             self._objects.objects = held
-            return str(exc).splitlines()[0]
+            text = str(exc).splitlines()[0] if str(exc) else ''
+            return text if isinstance(exc, ValueError) else f'{type(exc).__name__}: {text}'
         self._objects.objects = objects
         log = self._node.get_logger()
         if checked:
@@ -316,9 +336,8 @@ class MoveGroupServer:
         angles = self._hooks.joint_angles()
         scene.robot_state.joint_state.name = list(angles)
         scene.robot_state.joint_state.position = list(angles.values())
-        scene.world.collision_objects = [placed.msg for placed in self._objects.objects.values()]
-        for o in scene.world.collision_objects:
-            o.operation = o.ADD
+        scene.world.collision_objects = [placed.in_base(s.base_frame)
+                                         for placed in self._objects.objects.values()]
         return response
 
     def _on_apply_scene(self, request: Any, response: Any) -> Any:

@@ -28,6 +28,7 @@ from typing import Any, Callable
 from defusedxml import ElementTree
 import numpy as np
 from rclpy.task import Future
+from trajplan_ros.kinematics.rotations import rotation_matrix
 from trajplan_ros.planning import Mode, PlanStatus
 from trajplan_ros.ros.execution import Motion
 from trajplan_ros.ros.job import frame_problem, Outcome, rotation_problem
@@ -94,10 +95,7 @@ def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
     future of its own; the fastest region's plan is the answer (``fastest``).
     """
     s = settings
-    groups = srdf_groups(srdf)
-    if request.group_name and groups and request.group_name not in groups:
-        raise Refusal('INVALID_GROUP_NAME', f"group '{request.group_name}' is not in the SRDF "
-                                            f"(groups: {', '.join(groups)})")
+    _check_group(request.group_name, srdf)
     for name in IGNORED[:3]:
         if getattr(request, name):
             ignored(name)
@@ -157,13 +155,15 @@ def _budget(asked: float, name: str, settings: Settings,
     return float(budget)
 
 
-def ik_job(label: str, ik: Any, settings: Settings, ignored: Callable[[str], None]) -> Job:
+def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
+           ignored: Callable[[str], None]) -> Job:
     """
     Return the job of a PositionIKRequest: the tip link's pose, planned from the seed state.
 
     Its answer is the joint goal the planner would move to (Refusal: why it is refused).
     """
     s = settings
+    _check_group(ik.group_name, srdf)
     if _has_constraints(ik.constraints):
         raise Refusal('INVALID_GOAL_CONSTRAINTS', 'constraints on an IK request are not '
                                                   'offered: the pose is solved as given')
@@ -175,9 +175,11 @@ def ik_job(label: str, ik: Any, settings: Settings, ignored: Callable[[str], Non
     problem = rotation_problem(q)
     if problem:
         raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
-    job = Job(label, (p.x, p.y, p.z), future=Future(), frame=frame, orientation=q,
-              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose',
-              start_must_be_free=ik.avoid_collisions)
+    # the pose is the link's origin's; the planner places its tool point (tool_offset)
+    point = np.array([p.x, p.y, p.z]) + rotation_matrix(np.asarray(q) / np.linalg.norm(q)) @ (
+        s.arm.tool_point)
+    job = Job(label, tuple(point.tolist()), future=Future(), frame=frame, orientation=q,
+              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose')
     timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
     job.request_changes = {'mode': Mode.POSE,
                            'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
@@ -192,12 +194,7 @@ def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np
 
     The joint angles are the request's robot state's, those it does not name ``now``'s.
     """
-    names, positions = list(request.robot_state.joint_state.name), list(
-        request.robot_state.joint_state.position)
-    if len(names) != len(positions):
-        raise Refusal('INVALID_ROBOT_STATE', f'robot_state has {len(names)} joint names and '
-                                             f'{len(positions)} positions')
-    angles = {**now, **dict(zip(names, map(float, positions)))}
+    angles = {**now, **_named_angles(request.robot_state, 'robot_state')}
     frame = _frame(request.header.frame_id, settings)
     into = np.linalg.inv(settings.frames.to_base(frame, angles))
     poses = []
@@ -256,8 +253,8 @@ def _joint_goal_job(label: str, goal: Any, settings: Settings, future: Any,
                                                       f'position {c.position}, tolerances '
                                                       f'{c.tolerance_above}, {c.tolerance_below}')
         low, high = arm.lower[i], arm.upper[i]
-        q = c.position
-        if low - c.tolerance_below <= q <= high + c.tolerance_above:
+        q = c.position               # met within [q - below, q + above]: a limit may lie there
+        if low - c.tolerance_above <= q <= high + c.tolerance_below:
             q = min(max(q, low), high)
         angles[c.joint_name] = float(q)
     job = Job(label, (math.nan,) * 3, future=future, plan_only=True, start_state=start,
@@ -273,11 +270,7 @@ def _has_constraints(constraints: Any) -> bool:
 
 def _start_state(state: Any, settings: Settings) -> dict[str, float]:
     """Return the planned joints' angles a RobotState gives (the others come from the node)."""
-    names, positions = list(state.joint_state.name), list(state.joint_state.position)
-    if len(names) != len(positions):
-        raise Refusal('INVALID_ROBOT_STATE', f'start_state has {len(names)} joint names and '
-                                             f'{len(positions)} positions')
-    given = dict(zip(names, map(float, positions)))
+    given = _named_angles(state, 'start_state')
     arm = settings.arm
     margin = settings.request.start_limit_margin         # as the node's own start is held
     start = {}
@@ -290,6 +283,27 @@ def _start_state(state: Any, settings: Settings) -> dict[str, float]:
                                                  f'its limits [{low:g}, {high:g}]')
         start[name] = q
     return start
+
+
+def _check_group(group: str, srdf: str) -> None:
+    """Refuse a group the SRDF in use does not name (any group without an SRDF)."""
+    groups = srdf_groups(srdf)
+    if group and groups and group not in groups:
+        raise Refusal('INVALID_GROUP_NAME', f"group '{group}' is not in the SRDF "
+                                            f"(groups: {', '.join(groups)})")
+
+
+def _named_angles(state: Any, what: str) -> dict[str, float]:
+    """Return a RobotState's joint angles by name (Refusal: lengths differ, or not finite)."""
+    names, positions = list(state.joint_state.name), list(state.joint_state.position)
+    if len(names) != len(positions):
+        raise Refusal('INVALID_ROBOT_STATE', f'{what} has {len(names)} joint names and '
+                                             f'{len(positions)} positions')
+    given = dict(zip(names, map(float, positions)))
+    bad = [n for n, q in given.items() if not math.isfinite(q)]
+    if bad:
+        raise Refusal('INVALID_ROBOT_STATE', f'{what}: {bad[0]} = {given[bad[0]]} is not finite')
+    return given
 
 
 def _check_link(link: str, settings: Settings) -> None:
@@ -449,7 +463,8 @@ def fill_response(response: Any, outcome: Outcome | None, code: tuple[str, str],
 
 #: How an executed motion's end (``ros.execution``'s status) reads as MoveIt's code.
 EXECUTION_CODES = {'executed': 'SUCCESS', 'preempted': 'PREEMPTED', 'shut_down': 'PREEMPTED',
-                   'refused': 'INVALID_MOTION_PLAN'}
+                   'cancelled': 'PREEMPTED', 'refused': 'INVALID_MOTION_PLAN',
+                   'timed_out': 'TIMED_OUT'}
 
 
 def execution_motion(job: Job, trajectory: Any, settings: Settings, action: str) -> Motion:

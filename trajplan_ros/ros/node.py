@@ -251,8 +251,9 @@ class PlannerNode(Node):
         # start_positions is held to the chain when it, or the description, is being set
         strict = bool({p.name for p in params} & {'start_positions', 'robot_description'})
         try:
-            Settings.from_parameters(values, self._topic_description, strict_start=strict,
-                                     topic_semantic=self._topic_semantic)
+            self._with_live_scene(Settings.from_parameters(
+                values, self._topic_description, strict_start=strict,
+                topic_semantic=self._topic_semantic))           # the received obstacles fit
             resolve_action(self, values['controller_action'])
             if values['execution'] == 'action' and self._execution is None:
                 action_type()
@@ -297,6 +298,7 @@ class PlannerNode(Node):
             settings = Settings.from_parameters({**values, 'robot_description': ''}, msg.data,
                                                 strict_start=False,
                                                 topic_semantic=self._topic_semantic)
+            self._with_live_scene(settings)            # the received obstacles fit
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             self.get_logger().warning(f'robot_description refused: {_reason(exc)}; keeping '
                                       f'{jobs.describe_arm(self._settings)}')
@@ -363,14 +365,15 @@ class PlannerNode(Node):
 
         Raises InvalidCollisionInput (ids twice, too many) and keeps the scene as it was.
         """
+        base = Settings.from_parameters(self._parameter_values(), self._topic_description,
+                                        strict_start=False, topic_semantic=self._topic_semantic)
         before = self._live.obstacles, self._live.moveit
         if markers is not None:
             self._live.obstacles = markers
         if moveit is not None:
             self._live.moveit = tuple(moveit)
-        base = Settings.from_parameters(self._parameter_values(), self._topic_description,
-                                        strict_start=False, topic_semantic=self._topic_semantic)
         try:
+            Scene(self._live.received())         # checked even while collisions are off
             self._with_live_scene(base)
         except Exception:
             self._live.obstacles, self._live.moveit = before
@@ -384,6 +387,7 @@ class PlannerNode(Node):
             settings = Settings.from_parameters(self._parameter_values(),
                                                 self._topic_description, strict_start=False,
                                                 topic_semantic=msg.data)
+            self._with_live_scene(settings)
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             self.get_logger().warning(f'robot_description_semantic refused: {_reason(exc)}')
             return

@@ -23,9 +23,9 @@ import numpy as np
 from std_msgs.msg import ColorRGBA, Header
 from trajplan_ros.collision.distances import CollisionWorld
 from trajplan_ros.collision.errors import InvalidCollisionInput
-from trajplan_ros.collision.scene import Obstacle, pose_matrix, Scene
+from trajplan_ros.collision.scene import Obstacle, Scene
 from trajplan_ros.collision.shapes import Shape
-from trajplan_ros.ros.messages import pose_msg
+from trajplan_ros.ros.messages import pose_matrix_of, pose_msg
 from visualization_msgs.msg import Marker, MarkerArray
 
 if TYPE_CHECKING:
@@ -73,9 +73,8 @@ def _obstacle(marker: Marker, ident: str, base_frame: str) -> Obstacle:
     if marker.header.frame_id != base_frame:
         raise InvalidCollisionInput(f"{where}: frame '{marker.header.frame_id}' is not the base "
                                     f"frame '{base_frame}'")
-    s, p, o = marker.scale, marker.pose.position, marker.pose.orientation
-    quaternion = (o.x, o.y, o.z, o.w) if (o.x, o.y, o.z, o.w) != (0, 0, 0, 0) else (0, 0, 0, 1)
-    pose = pose_matrix((p.x, p.y, p.z), quaternion, where)
+    s = marker.scale
+    pose = pose_matrix_of(marker.pose, where)
     if marker.type == Marker.CUBE:
         shape = Shape.primitive('box', (s.x, s.y, s.z), pose, where)
     elif marker.type == Marker.SPHERE:

@@ -128,7 +128,9 @@ def multipliers(obj: Objective, x: np.ndarray) -> np.ndarray | None:
     limit = (x - obj.lower <= ON_LIMIT) | (obj.upper - x <= ON_LIMIT)
     free = ~(ties | limit)
     ties &= ~limit                  # a tying joint on a limit has a multiplier of each kind
-    ties &= slope > 0.0             # a joint that has not moved (x at the start) fixes no scale
+    still = ties & ~(slope > 0.0)   # a tying joint at its start: moving it costs nothing yet
+    free |= still
+    ties &= ~still
     if not ties.any():
         return None
     jt = constraint_jacobian(obj, x).T                      # (planned, constraints)
