@@ -505,8 +505,8 @@ def test_world_objects_are_added_moved_appended_and_removed_and_plans_avoid_them
                                  'meshes': 0}]
     assert scene['joints'] == list(ARM.joint_names)
     assert twice['ids'] == ['crate']
-    assert node.has(r"collision_object refused, scene kept: obstacle ids must be unique: "
-                    r"\['crate#1'\] repeat")
+    assert node.has(r'collision_object refused, scene kept: obstacle ids must be unique: '
+                    r".'crate#1'. repeat")
     assert mesh['ids'] == ['crate', 'part']
     assert in_mesh['code'] == 'GOAL_IN_COLLISION' and 'part' in in_mesh['message'], in_mesh
     assert blocked_start['code'] == 'START_STATE_IN_COLLISION', blocked_start
