@@ -65,8 +65,10 @@ POLISH_STEPS = 30
 FIT = 4
 #: The target has settled when a step moves it less than this fraction of the radius.
 SETTLED = 1e-4
-#: A joint ties with R when its time is within this fraction of R.
-TIE = 1e-7
+#: A joint ties with R when its time is within this fraction of R: the polish leaves the
+#: tying joints' times apart by up to some 1e-5 of R (an SO-101 plan: 4e-6), and a tie missed
+#: leaves no multipliers, so no step at all.
+TIE = 1e-4
 #: A joint lies on a limit within this many radians.
 ON_LIMIT = 1e-9
 #: A radius of at most this (m or rad) is the goal itself: it could gain some 1e-6 of R.
