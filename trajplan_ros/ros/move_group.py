@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 import itertools
 import math
-import time
 from typing import Any, Awaitable, Callable
 
 from geometry_msgs.msg import PoseStamped
@@ -116,7 +115,7 @@ class MoveGroupServer:
         """
         Plan a MotionPlanRequest into a MotionPlanResponse; return the code's name.
 
-        Each goal region is planned as a call of its own, in turn, within what is left of
+        Each goal region is planned as a call of its own, in turn, with its share of
         ``allowed_planning_time``, until ``cancelled``; the fastest answers.
         """
         s = self._hooks.settings()
@@ -128,13 +127,10 @@ class MoveGroupServer:
             moveit.fill_response(response, None, (exc.code, str(exc)), s, asked.group_name,
                                  self._hooks.header(s.base_frame), self._codes)
             return exc.code
-        budget = jobs[0].request_changes['max_planning_time']      # for all of them
-        deadline, outcomes = time.monotonic() + budget, []
+        outcomes = []
         for job in jobs:
-            left = deadline - time.monotonic()
-            if outcomes and (left <= 0.0 or cancelled()):
+            if outcomes and cancelled():
                 break                        # the regions planned so far answer
-            job.request_changes = {**job.request_changes, 'max_planning_time': max(left, 1e-3)}
             outcomes.append(await self._hooks.queue_call(job, None))
         best, code = moveit.fastest(outcomes, jobs[:len(outcomes)])
         moveit.fill_response(response, outcomes[best], code, s, asked.group_name,

@@ -110,8 +110,8 @@ def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
     scale = {f'{kind}_scaling': factor for kind, factor in (
         ('velocity', request.max_velocity_scaling_factor),
         ('acceleration', request.max_acceleration_scaling_factor)) if 0.0 < factor <= 1.0}
-    budget = _budget(request.allowed_planning_time, 'allowed_planning_time', s, ignored)
-    count = len(request.goal_constraints)
+    count = len(request.goal_constraints)        # the regions share the time (searched in turn)
+    budget = _budget(request.allowed_planning_time, 'allowed_planning_time', s, ignored) / count
     jobs = []
     for k, goal in enumerate(request.goal_constraints):
         named = label if count == 1 else f'{label} region {k + 1}/{count}'
