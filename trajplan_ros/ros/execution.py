@@ -11,9 +11,10 @@ name in the node's namespace but applies no remapping rule, so the name is resol
 (``resolve_action``) and the client gets it absolute. A motion passes through these states:
 
 * waiting: planned, not yet sent, because no server is there yet (at most ``controller_timeout``
-  s, then ``no_controller``), or a newer motion replaces it (``preempted``, never sent); when
-  the server is there, a plan whose start is more than ``start_tolerance`` from the newest
-  joint_states is ``refused``;
+  s, then ``no_controller``) or no joint_states of its joints came yet (as long, then
+  ``refused``), or a newer motion replaces it (``preempted``, never sent); when the server is
+  there, a plan whose start is more than ``start_tolerance`` from the newest joint_states is
+  ``refused``;
 * sent: the goal is with the controller; no answer within ``controller_timeout`` s ends it as
   ``timed_out``; rejected: ``rejected``;
 * accepted: executing; it ends with the controller's result (``executed``, or the result code's
