@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
+import functools
 from typing import Any, Callable
 
 import numpy as np
@@ -52,8 +53,9 @@ class PlacedObject:
         out.pose = pose_msg(self.frame_pose @ pose_matrix_of(self.msg.pose, 'object'))
         return out
 
+    @functools.cached_property
     def obstacles(self) -> list[Obstacle]:
-        """Return the object's shapes as obstacles in the base frame."""
+        """Return the object's shapes as obstacles in the base frame (built once)."""
         o = self.msg
         where = f"collision object '{o.id}'"
         for shapes, poses, kind in ((o.primitives, o.primitive_poses, 'primitive'),
@@ -112,13 +114,13 @@ class MoveItObjects:
             else:
                 raise InvalidCollisionInput(f'{where}: operation {msg.operation} is not ADD, '
                                             'REMOVE, APPEND or MOVE')
-            out[msg.id].obstacles()                       # refused now, not at a plan
+            out[msg.id].obstacles                         # refused now, not at a plan
         return out
 
     def obstacles(self, objects: dict[str, PlacedObject] | None = None) -> list[Obstacle]:
         """Return the obstacles of ``objects`` (default: those held), each shape one."""
         held = self.objects if objects is None else objects
-        return [o for placed in held.values() for o in placed.obstacles()]
+        return [o for placed in held.values() for o in placed.obstacles]
 
 
 def _appended(placed: PlacedObject, msg: Any, frame_pose: np.ndarray) -> PlacedObject:

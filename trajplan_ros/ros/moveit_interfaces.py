@@ -278,7 +278,7 @@ def _start_state(state: Any, settings: Settings) -> dict[str, float]:
         if name not in given:
             continue
         q = given[name]
-        if not math.isfinite(q) or not low - margin <= q <= high + margin:
+        if not low - margin <= q <= high + margin:            # finite: _named_angles
             raise Refusal('INVALID_ROBOT_STATE', f'start_state: {name} = {q} rad is outside '
                                                  f'its limits [{low:g}, {high:g}]')
         start[name] = q

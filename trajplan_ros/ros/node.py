@@ -251,9 +251,9 @@ class PlannerNode(Node):
         # start_positions is held to the chain when it, or the description, is being set
         strict = bool({p.name for p in params} & {'start_positions', 'robot_description'})
         try:
-            self._with_live_scene(Settings.from_parameters(
+            self._check_live(Settings.from_parameters(
                 values, self._topic_description, strict_start=strict,
-                topic_semantic=self._topic_semantic))           # the received obstacles fit
+                topic_semantic=self._topic_semantic))
             resolve_action(self, values['controller_action'])
             if values['execution'] == 'action' and self._execution is None:
                 action_type()
@@ -298,7 +298,7 @@ class PlannerNode(Node):
             settings = Settings.from_parameters({**values, 'robot_description': ''}, msg.data,
                                                 strict_start=False,
                                                 topic_semantic=self._topic_semantic)
-            self._with_live_scene(settings)            # the received obstacles fit
+            self._check_live(settings)
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             self.get_logger().warning(f'robot_description refused: {_reason(exc)}; keeping '
                                       f'{jobs.describe_arm(self._settings)}')
@@ -358,6 +358,16 @@ class PlannerNode(Node):
         scene = Scene(w.scene.obstacles + self._live.received())
         return settings.planning_with(world=CollisionWorld(w.arm, scene, w.padding))
 
+    def _check_live(self, settings: Settings) -> None:
+        """
+        Refuse settings whose scene cannot take the received obstacles (InvalidCollisionInput).
+
+        Ids twice or too many obstacles, checked even while collisions are off; the world
+        itself is built once, when the settings are used (``_with_live_scene``).
+        """
+        Scene((settings.world.scene.obstacles if settings.world is not None else ())
+              + self._live.received())
+
     def _use_live(self, markers: dict[str, Obstacle] | None = None,
                   moveit: list[Obstacle] | None = None) -> bool:
         """
@@ -373,8 +383,7 @@ class PlannerNode(Node):
         if moveit is not None:
             self._live.moveit = tuple(moveit)
         try:
-            Scene(self._live.received())         # checked even while collisions are off
-            self._with_live_scene(base)
+            self._check_live(base)
         except Exception:
             self._live.obstacles, self._live.moveit = before
             raise
@@ -387,7 +396,7 @@ class PlannerNode(Node):
             settings = Settings.from_parameters(self._parameter_values(),
                                                 self._topic_description, strict_start=False,
                                                 topic_semantic=msg.data)
-            self._with_live_scene(settings)
+            self._check_live(settings)
         except Exception as exc:  # noqa: BLE001 - untrusted text: any fault is a refusal
             self.get_logger().warning(f'robot_description_semantic refused: {_reason(exc)}')
             return
