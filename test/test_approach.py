@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.bench.chain_bench import minimax_reference
@@ -37,7 +38,7 @@ def test_a_pick_from_above_points_down_and_is_as_fast_as_the_reference(
     angle = np.arctan2(np.linalg.norm(np.cross(u[0], DOWN)), u[0] @ DOWN)
     assert angle == pytest.approx(result.axis_error_rad, abs=1e-12)
     assert result.axis_error_rad <= 1e-3 and 'from the approach direction' in result.message
-    obj = Objective(arm, np.array(goal), start, mode='approach')
+    obj = Objective(arm, Goal(np.array(goal), mode='approach'), start)
     reference, _ = minimax_reference(obj.in_plane() or obj, np.random.default_rng(0), starts=8)
     assert result.motion_time_s <= reference * (1 + 1e-3)
 
@@ -96,8 +97,8 @@ def test_only_a_pan_and_pitch_arm_first_holds_the_in_plane_component() -> None:
     for name, expected in (('so101', True), ('ur5', False), ('panda', False)):
         arm = published(name)
         start = np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
-        obj = Objective(arm, goal, start, mode=down)
+        obj = Objective(arm, Goal(goal, mode=down), start)
         assert obj.pan_and_pitch() is expected, name
         assert (obj.in_plane() is not None) is expected
-    assert Objective(paper_arm(), goal, np.zeros(5), mode=down).pan_and_pitch()
-    assert Objective(paper_arm(), goal, np.zeros(5)).in_plane() is None        # free mode
+    assert Objective(paper_arm(), Goal(goal, mode=down), np.zeros(5)).pan_and_pitch()
+    assert Objective(paper_arm(), Goal(goal), np.zeros(5)).in_plane() is None        # free mode

@@ -8,13 +8,14 @@ import pytest
 
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.planning.planner import ALGORITHMS
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET
 
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_baseline_runs_within_budget_and_improves(name):
-    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    obj = Objective(paper_arm(), Goal(TARGET), np.zeros(5))
     res = ALGORITHMS[name](obj, population=40, max_iter=120, seed=7)
     assert res.nfev <= 40 * (120 + 1)
     assert res.nit == res.history_fun.size <= 120
@@ -26,7 +27,7 @@ def test_baseline_runs_within_budget_and_improves(name):
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_baseline_is_deterministic(name):
-    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    obj = Objective(paper_arm(), Goal(TARGET), np.zeros(5))
     a = ALGORITHMS[name](obj, max_iter=30, seed=3)
     b = ALGORITHMS[name](obj, max_iter=30, seed=3)
     assert a.x.tobytes() == b.x.tobytes()
@@ -34,7 +35,7 @@ def test_baseline_is_deterministic(name):
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_an_interrupt_that_never_fires_changes_nothing(name):
-    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    obj = Objective(paper_arm(), Goal(TARGET), np.zeros(5))
     asked = []
     plain = ALGORITHMS[name](obj, max_iter=200, seed=5)
     watched = ALGORITHMS[name](obj, max_iter=200, seed=5, interrupt=lambda: asked.append(1))
@@ -47,7 +48,7 @@ def test_an_interrupt_that_never_fires_changes_nothing(name):
 
 @pytest.mark.parametrize('name', ['pso', 'spso', 'ga', 'de'])
 def test_an_interrupt_ends_the_run_with_the_best_so_far(name):
-    obj = Objective(paper_arm(), TARGET, np.zeros(5))
+    obj = Objective(paper_arm(), Goal(TARGET), np.zeros(5))
     asks = itertools.count()
     res = ALGORITHMS[name](obj, max_iter=200, seed=5,
                            interrupt=lambda: 'stop' if next(asks) >= 9 else None)

@@ -21,7 +21,8 @@ import pytest
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import plan
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import Case, draw_cases, paper_case, PAPER_TABLE5
 from trajplan_ros.tools.bench.methods import METHODS, pyswarms_logging
 from trajplan_ros.tools.bench.reference import exact_minimum
@@ -76,7 +77,7 @@ def test_radial_cases_all_have_a_radial_solution() -> None:
 def test_every_method_is_scored_on_the_same_objective() -> None:
     case = draw_cases(ARM, 1, mode=Mode.FREE, random_starts=True, seed=1)[0]
     results = run([METHODS['iepso'], METHODS['iepso-noreward']], [case], ARM, Mode.FREE)
-    default_f = Objective(ARM, case.goal, case.start)
+    default_f = Objective(ARM, Goal(case.goal), case.start)
     for name in ('iepso', 'iepso-noreward'):
         r = results[name]
         p = r.plans[0]
@@ -234,7 +235,7 @@ _FRESH_PYSWARMS = """
 import logging, os, sys
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile
-from trajplan_ros.search.objective import Mode
+from trajplan_ros.search.goal import Mode
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import load, METHODS
 root = logging.getLogger()

@@ -8,7 +8,8 @@ import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Objective
 from trajplan_ros.tools.bench.cases import PUBLISHED
 from trajplan_ros.tools.bench.chain_bench import (draw_chain_cases, IndependentFk,
                                                   minimax_reference)
@@ -21,7 +22,7 @@ def test_the_reference_is_feasible_and_finds_the_exact_minimum_on_the_paper_arm(
     rng = np.random.default_rng(4)
     for k in range(5):
         goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, 5)))[0][0]
-        obj = Objective(arm, goal, np.zeros(5))
+        obj = Objective(arm, Goal(goal), np.zeros(5))
         time, x = minimax_reference(obj, rng, starts=24)
         exact = exact_minimum(arm, goal, np.zeros(5)).motion_time_s
         assert x is not None
@@ -63,7 +64,7 @@ def test_radial_goals_without_a_radial_pose_are_dropped() -> None:
                                       starts=6)
     assert len(cases) == 2 and dropped >= 0
     for case in cases:
-        obj = Objective(arm, case.goal, case.start, mode=Mode.RADIAL)
+        obj = Objective(arm, Goal(case.goal, mode=Mode.RADIAL), case.start)
         p, u = obj.tool(case.reference_q[None, : obj.arm.planned])
         assert np.linalg.norm(p[0] - case.goal) <= 1e-9 and obj.axis_angle(u)[0] <= 1e-9
 

@@ -12,6 +12,7 @@ from trajplan_ros.motion.time_law import motion_times
 from trajplan_ros.motion.trajectory import path_trajectory
 from trajplan_ros.planning.planner import PlanRequest
 from trajplan_ros.search.detour import _clipped
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench import ompl_peer
 from trajplan_ros.tools.bench.clearance import IndependentCheck
@@ -79,7 +80,7 @@ def test_a_goal_with_a_free_direct_motion_gets_the_same_plan_with_detours(blocke
 
 def test_a_via_point_clipped_into_the_least_time_box_costs_nothing_over_the_direct_motion(
         ) -> None:
-    obj = Objective(paper_arm(), np.array([0.15, 0.19, 0.17]), np.zeros(5), omega=0.2)
+    obj = Objective(paper_arm(), Goal(np.array([0.15, 0.19, 0.17])), np.zeros(5), omega=0.2)
     before, after = np.zeros(5), np.array([0.9, 0.1, 0.9, -0.2, 0.0])
     via = np.array([-0.5, 1.2, 0.3, 0.8, 0.0])
     t1, t2, direct = (float(motion_times(obj.law, b[None], a)[0])

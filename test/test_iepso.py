@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.iepso import iepso
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.reference import exact_minimum
@@ -17,7 +18,7 @@ TARGET = np.array([0.151171, 0.19162, 0.172124])
 
 @pytest.mark.parametrize('mode', ['free', 'radial'])
 def test_paper_target_exact_optimum(mode):
-    obj = Objective(ARM, TARGET, np.zeros(5), mode=mode)
+    obj = Objective(ARM, Goal(TARGET, mode=mode), np.zeros(5))
     ref = exact_minimum(ARM, TARGET, np.zeros(5), mode=mode)
     res = iepso(obj, seed=0)
     assert res.error <= 1e-9
@@ -30,7 +31,7 @@ def test_random_goals_and_starts_reach_the_exact_optimum():
     for i in range(12):
         goal = ARM.tool(rng.uniform(ARM.lower, ARM.upper, (1, 5)))[0][0]
         start = rng.uniform(ARM.lower, ARM.upper)
-        res = iepso(Objective(ARM, goal, start), seed=i)
+        res = iepso(Objective(ARM, Goal(goal), start), seed=i)
         ref = exact_minimum(ARM, goal, start)
         assert res.error <= 1e-6, i
         assert res.motion_time <= ref.motion_time_s * 1.001, i
@@ -60,7 +61,7 @@ SETTLING_CASES = [
 
 @pytest.mark.parametrize('goal, start, seed', SETTLING_CASES)
 def test_agreement_waits_for_settled_candidates(goal, start, seed):
-    res = iepso(Objective(ARM, np.array(goal), np.array(start)), seed=seed)
+    res = iepso(Objective(ARM, Goal(np.array(goal)), np.array(start)), seed=seed)
     ref = exact_minimum(ARM, np.array(goal), np.array(start))
     assert res.error <= 1e-9
     assert res.motion_time <= ref.motion_time_s * 1.001
@@ -100,7 +101,7 @@ RADIAL_CURVE_CASES = [
 def test_optima_beyond_a_gap_in_the_curve_are_found(goal, start, seed, mode):
     # with earlier settings the swarms settled elsewhere on these (test_solution_curve has
     # goals on which today's swarms do, and the curve search is what finds the optimum)
-    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    obj = Objective(ARM, Goal(np.array(goal), mode=mode), np.array(start))
     ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
     res = iepso(obj, seed=seed)
     assert res.error <= 1e-9
@@ -108,7 +109,7 @@ def test_optima_beyond_a_gap_in_the_curve_are_found(goal, start, seed, mode):
 
 
 def test_same_seed_same_answer_bit_for_bit():
-    obj = Objective(ARM, TARGET, np.array([0.3, -0.2, 0.1, 0.4, 0.0]))
+    obj = Objective(ARM, Goal(TARGET), np.array([0.3, -0.2, 0.1, 0.4, 0.0]))
     a, b = iepso(obj, seed=42), iepso(obj, seed=42)
     assert a.x.tobytes() == b.x.tobytes()
     np.testing.assert_array_equal(a.history_fun, b.history_fun)
@@ -173,7 +174,7 @@ def test_results_are_pinned(mode, goal, start, seed, x_hex, fun_hex, nit, nfev):
     # to 1e-12, not bit for bit: numpy's sin and cos take other SIMD paths on other CPUs, which
     # moves the last bits of a pose (seen: 2 ulp of one radial answer on another machine); F
     # holds the reward of an error of ~1e-17 m, which those bits move by a few parts in 1e7
-    res = iepso(Objective(ARM, np.array(goal), np.array(start), mode=mode), seed=seed)
+    res = iepso(Objective(ARM, Goal(np.array(goal), mode=mode), np.array(start)), seed=seed)
     np.testing.assert_allclose(res.x, [float.fromhex(v) for v in x_hex], rtol=0, atol=1e-12)
     np.testing.assert_allclose(res.fun, float.fromhex(fun_hex), rtol=1e-5)
     assert (res.nit, res.nfev) == (nit, nfev)
@@ -183,7 +184,8 @@ def test_papers_iepso_alone_is_pinned_bit_for_bit():
     # recorded from the pre-rewrite implementation too (see PINNED_CASES); without the polish,
     # which settles slightly different swarms on the same exact answer, these values change
     # with any change in the swarm arithmetic, down to the association of eq. (4)'s sum
-    res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=3, polish=False, swarms=2, max_iter=60)
+    res = iepso(Objective(ARM, Goal(TARGET), np.zeros(5)), seed=3, polish=False, swarms=2,
+                max_iter=60)
     assert [v.hex() for v in res.x] == ['0x1.ce0f32e3f43b7p-1', '0x1.d4eb9ede121ffp-1',
                                         '0x1.b1f70255d21d9p-1', '0x1.88cea0dad5ef4p+0']
     # F re-recorded for the compiled rule base (single precision, summed in another order):
@@ -193,14 +195,14 @@ def test_papers_iepso_alone_is_pinned_bit_for_bit():
 
 
 def test_history_is_a_monotone_record_of_the_best():
-    res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=3, polish=False, max_iter=150)
+    res = iepso(Objective(ARM, Goal(TARGET), np.zeros(5)), seed=3, polish=False, max_iter=150)
     assert res.nit == res.history_fun.size == res.history_error.size
     assert np.all(np.diff(res.history_fun) <= 0)
     assert res.nfev >= res.nit * 40
 
 
 def test_papers_iepso_alone_gets_close_but_not_exact():
-    res = iepso(Objective(ARM, TARGET, np.zeros(5)), seed=1, polish=False, swarms=1)
+    res = iepso(Objective(ARM, Goal(TARGET), np.zeros(5)), seed=1, polish=False, swarms=1)
     assert res.error < 5e-6            # within the reward threshold eps
     assert res.fun < 0
 
@@ -213,7 +215,7 @@ def test_other_chains_reach_goals_from_their_own_configurations(n):
         d=rng.uniform(0.0, 0.1, n), lower=-np.full(n, 2.6), upper=np.full(n, 2.6))
     for k in range(3):
         goal = arm.tool(rng.uniform(arm.lower, arm.upper, (1, n)))[0][0]
-        res = iepso(Objective(arm, goal, np.zeros(n)), seed=k)
+        res = iepso(Objective(arm, Goal(goal), np.zeros(n)), seed=k)
         assert res.error <= 1e-6, (n, k)
 
 
@@ -230,7 +232,7 @@ FAR = np.array([0.36, 0.0, 0.05])
 @pytest.mark.parametrize('goal, polish, max_iter', [(TARGET, True, 1000), (FAR, True, 1000),
                                                     (TARGET, False, 400), (FAR, False, 120)])
 def test_an_interrupt_that_never_fires_changes_nothing(goal, polish, max_iter):
-    obj = Objective(ARM, goal, np.zeros(5))
+    obj = Objective(ARM, Goal(goal), np.zeros(5))
     asked = []
     plain = iepso(obj, seed=2, polish=polish, max_iter=max_iter)
     watched = iepso(obj, seed=2, polish=polish, max_iter=max_iter,
@@ -248,7 +250,7 @@ def test_an_interrupt_that_never_fires_changes_nothing(goal, polish, max_iter):
 
 @pytest.mark.parametrize('polish', [True, False])
 def test_an_interrupt_ends_the_run_with_the_best_so_far(polish):
-    obj = Objective(ARM, FAR, np.zeros(5))
+    obj = Objective(ARM, Goal(FAR), np.zeros(5))
     res = iepso(obj, seed=2, polish=polish, max_iter=120, interrupt=interrupt_after(7, 'late'))
     assert res.interrupted == 'late' and not res.converged
     # asked after every iteration (eight) and, with the polish, after its steps too
@@ -258,4 +260,4 @@ def test_an_interrupt_ends_the_run_with_the_best_so_far(polish):
 
 def test_bad_settings_raise():
     with pytest.raises(ValueError):
-        iepso(Objective(ARM, TARGET, np.zeros(5)), population=1)
+        iepso(Objective(ARM, Goal(TARGET), np.zeros(5)), population=1)

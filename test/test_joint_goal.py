@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from trajplan_ros import plan, PlanStatus
+from trajplan_ros import Goal, plan, PlanStatus
 from trajplan_ros.collision.free_motion import START_TOLERANCE
 from trajplan_ros.kinematics import paper_arm
 from trajplan_ros.motion.time_law import motion_times
@@ -20,7 +20,7 @@ GOAL = np.array([0.5, -0.3, 0.4, 0.2, 0.1])
 
 def test_a_joint_goal_is_reached_exactly_in_the_time_of_eq_10() -> None:
     start = np.array([0.1, 0.0, -0.2, 0.0, 0.3])
-    result = plan(PlanRequest((), start, joint_goal=GOAL))
+    result = plan(PlanRequest(Goal(joint_goal=GOAL), start))
     assert result.success, result.message
     assert result.message.startswith('reached the joint goal in 3.0000 s of motion')
     np.testing.assert_array_equal(result.joint_goal, GOAL)
@@ -34,7 +34,7 @@ def test_a_joint_goal_is_reached_exactly_in_the_time_of_eq_10() -> None:
 
 def test_the_planned_joints_alone_leave_the_held_ones_at_their_start() -> None:
     start = np.array([0.0, 0.0, 0.0, 0.0, 0.7])
-    result = plan(PlanRequest((), start, joint_goal=GOAL[:ARM.planned]))
+    result = plan(PlanRequest(Goal(joint_goal=GOAL[:ARM.planned]), start))
     assert result.success, result.message
     np.testing.assert_array_equal(result.joint_goal, [*GOAL[:ARM.planned], 0.7])
 
@@ -46,7 +46,7 @@ def test_the_planned_joints_alone_leave_the_held_ones_at_their_start() -> None:
 ])
 def test_a_joint_goal_the_arm_cannot_take_is_rejected_with_the_reason(joint_goal,
                                                                       reason) -> None:
-    result = plan(PlanRequest((), joint_goal=joint_goal))
+    result = plan(PlanRequest(Goal(joint_goal=joint_goal)))
     assert result.status is PlanStatus.REJECTED and result.joint_goal is None
     assert result.message.startswith(reason)
 
@@ -54,7 +54,7 @@ def test_a_joint_goal_the_arm_cannot_take_is_rejected_with_the_reason(joint_goal
 def test_a_joint_goal_whose_pose_collides_is_rejected_naming_the_pair() -> None:
     world = _warm_up_world()                     # a box at (0.12, -0.12, 0.1)
     into = plan(PlanRequest((0.12, -0.12, 0.1), seed=0)).joint_goal
-    result = plan(PlanRequest((), joint_goal=into, world=world))
+    result = plan(PlanRequest(Goal(joint_goal=into), world=world))
     assert result.status is PlanStatus.REJECTED
     assert result.message.startswith('the joint goal is in collision: ')
     assert 'box' in result.clearance_pair
@@ -69,8 +69,8 @@ def test_a_blocked_joint_goal_gets_a_detour_to_it_that_python_fcl_calls_free(
         goals = [draw_goal(bench, world, rng) for _ in range(5)]
     around = plan(PlanRequest(goals[1], bench.start, arm=bench.arm, seed=121, world=world))
     assert around.success and around.via_points, around.message
-    request = PlanRequest((), bench.start, arm=bench.arm, seed=0, world=world,
-                          joint_goal=around.joint_goal)
+    request = PlanRequest(Goal(joint_goal=around.joint_goal), bench.start, arm=bench.arm,
+                          seed=0, world=world)
     direct = plan(request.replace(detours=False))
     assert direct.status is PlanStatus.NOT_REACHED
     assert direct.message.startswith('the direct motion to the joint goal collides: ')

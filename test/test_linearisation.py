@@ -6,6 +6,7 @@ import pytest
 
 from trajplan_ros import ArmModel, paper_arm
 from trajplan_ros.kinematics.rotations import quaternions
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.linearisation import (complete_null_basis, invert_symmetric,
                                                line_minimax, line_searches)
 from trajplan_ros.search.objective import Objective
@@ -35,7 +36,7 @@ def objective(name: str) -> Objective:
     frame = arm.frames(rng.uniform(arm.lower, arm.upper, (1, arm.n_joints)))[0, -1]
     start = rng.uniform(arm.lower, arm.upper, arm.n_joints)
     orientation = quaternions(frame[None, :3, :3])[0] if mode == 'pose' else None
-    return Objective(arm, frame[:3, 3], start, mode=mode, orientation=orientation)
+    return Objective(arm, Goal(frame[:3, 3], mode=mode, orientation=orientation), start)
 
 
 def residuals(obj: Objective, x: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from nav_msgs.srv import GetPlan
 import pytest
 from std_msgs.msg import Header
+from trajplan_ros.planning import Goal
 from trajplan_ros.ros.diagnostics import Counters, diagnostic_array
 from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
@@ -22,11 +23,11 @@ ARM = ('joint1', 'joint2', 'joint3')
 
 
 def call(n: int) -> Job:
-    return Job(f'service call #{n}', (0.1 * n, 0.0, 0.0), future=object())
+    return Job(f'service call #{n}', Goal((0.1 * n, 0.0, 0.0)), future=object())
 
 
 def goal(n: int) -> Job:
-    return Job(f'goal #{n}', (0.0, 0.1 * n, 0.0))
+    return Job(f'goal #{n}', Goal((0.0, 0.1 * n, 0.0)))
 
 
 def test_calls_come_out_in_arrival_order_before_the_newest_goal() -> None:

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import paper_arm
-from trajplan_ros.search.objective import InvalidRequest, Objective
+from trajplan_ros.search.goal import Goal, InvalidRequest
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET
 from trajplan_ros.tools.bench.reference import exact_minimum
 
@@ -13,14 +14,14 @@ ARM = paper_arm()
 
 
 def test_motion_time_is_eq10():
-    obj = Objective(ARM, TARGET, np.zeros(5))
+    obj = Objective(ARM, Goal(TARGET), np.zeros(5))
     x = np.array([[0.9, 1.49, -0.23, 1.17]])
     assert obj.motion_time(x)[0] == pytest.approx(1.49 / 0.2)
 
 
 def test_efficiency_at_an_exact_solution_is_r_minus_24():
     ref = exact_minimum(ARM, TARGET, np.zeros(5))
-    ev = Objective(ARM, TARGET, np.zeros(5))(ref.joint_goal[None, :])
+    ev = Objective(ARM, Goal(TARGET), np.zeros(5))(ref.joint_goal[None, :])
     assert ev.error[0] < 1e-15
     assert ev.efficiency[0] == pytest.approx(ref.motion_time_s - 24.0, abs=1e-4)   # F* = -19.49
 
@@ -28,7 +29,7 @@ def test_efficiency_at_an_exact_solution_is_r_minus_24():
 def test_radial_error_vanishes_only_at_radial_solutions():
     free = exact_minimum(ARM, TARGET, np.zeros(5)).joint_goal[None, :]
     radial = exact_minimum(ARM, TARGET, np.zeros(5), mode='radial').joint_goal[None, :]
-    obj = Objective(ARM, TARGET, np.zeros(5), mode='radial')
+    obj = Objective(ARM, Goal(TARGET, mode='radial'), np.zeros(5))
     assert obj(radial).error[0] < 1e-12
     assert obj(free).error[0] > 1e-3
 
@@ -37,7 +38,7 @@ def test_fewer_axis_conditions_leave_the_axis_freer():
     # across = 1: the axis held in the plane of the goal ray and the second vector across it;
     # the error is the angle out of that plane. across = 0: the position alone.
     x = np.random.default_rng(1).uniform(ARM.lower[:4], ARM.upper[:4], (8, 4))
-    full, one, none = (Objective(ARM, TARGET, np.zeros(5), mode='radial', across=n)
+    full, one, none = (Objective(ARM, Goal(TARGET, mode='radial'), np.zeros(5), across=n)
                        for n in (2, 1, 0))
     tool = full.tool(x)
     p, u = tool
@@ -52,11 +53,11 @@ def test_fewer_axis_conditions_leave_the_axis_freer():
     assert np.all(np.abs(one.residuals(turned)[:, 3]) < 1e-15)         # on its constraints,
     np.testing.assert_allclose(one.errors(turned), none.errors(tool))  # no axis error
     with pytest.raises(ValueError, match='across'):
-        Objective(ARM, TARGET, np.zeros(5), mode='radial', across=3)
+        Objective(ARM, Goal(TARGET, mode='radial'), np.zeros(5), across=3)
 
 
 def test_vectorised_over_particles():
-    obj = Objective(ARM, TARGET, np.zeros(5))
+    obj = Objective(ARM, Goal(TARGET), np.zeros(5))
     x = np.random.default_rng(0).uniform(obj.lower, obj.upper, (64, 4))
     batch = obj(x)
     single = [obj(row[None, :]) for row in x[:3]]
@@ -73,12 +74,12 @@ def test_vectorised_over_particles():
 ])
 def test_bad_requests_are_refused_before_optimisation(goal, start, reason):
     with pytest.raises(InvalidRequest, match=reason):
-        Objective(ARM, np.asarray(goal, dtype=float),
+        Objective(ARM, Goal(np.asarray(goal, dtype=float)),
                   np.zeros(5) if start is None else np.asarray(start, dtype=float))
 
 
 def test_bad_settings_raise():
     with pytest.raises(ValueError):
-        Objective(ARM, TARGET, np.zeros(5), omega=0.0)
+        Objective(ARM, Goal(TARGET), np.zeros(5), omega=0.0)
     with pytest.raises(ValueError):
-        Objective(ARM, TARGET, np.zeros(5), mode='sideways')
+        Objective(ARM, Goal(TARGET, mode='sideways'), np.zeros(5))

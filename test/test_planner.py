@@ -13,8 +13,9 @@ from trajplan_ros import (ArmModel, DEFAULT_TOLERANCE, MotionProfile, paper_arm,
                           PlanRequest, PlanStatus)
 from trajplan_ros.planning import planner
 from trajplan_ros.planning.planner import ALGORITHMS, describe_residual
+from trajplan_ros.search.goal import Goal, Mode
 from trajplan_ros.search.iepso import iepso
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import draw_cases, PAPER_TARGET
 from trajplan_ros.tools.bench.reference import _solutions, radial_angle
 
@@ -105,7 +106,7 @@ def test_tolerance_decides_success():
 def test_comparison_algorithms_are_chosen_by_name(algorithm):
     result = plan(TARGET, algorithm=algorithm, seed=0, max_iterations=60)
     assert result.algorithm == algorithm
-    direct = ALGORITHMS[algorithm](Objective(paper_arm(), PAPER_TARGET, np.zeros(5)),
+    direct = ALGORITHMS[algorithm](Objective(paper_arm(), Goal(PAPER_TARGET), np.zeros(5)),
                                    max_iter=60, seed=0)
     assert result.joint_goal[:4].tobytes() == direct.x.tobytes()
     assert result.iterations == direct.nit and result.evaluations == direct.nfev
@@ -129,7 +130,9 @@ def test_a_request_is_checked_with_one_line_reasons() -> None:
     for change, reason in [
             ({'algorithm': 'annealing'}, "unknown algorithm 'annealing'; choose from iepso"),
             ({'angular_velocity': 0.0}, 'angular_velocity must be finite and positive'),
-            ({'tolerance': float('nan')}, 'tolerance must be finite and positive'),
+            ({'goal': Goal(TARGET, tolerance=float('nan'))}, 'tolerance must be finite and '),
+            ({'goal': Goal(TARGET, orientation=(0, 0, 0, 1))}, 'an orientation is for pose and '),
+            ({'goal': Goal(TARGET, approach=(0, 0, 0))}, 'approach must be 3 finite numbers'),
             ({'max_planning_time': -1.0}, 'max_planning_time must be finite and positive'),
             ({'convergence_precision': -1e-9}, 'convergence_precision must be finite and not'),
             ({'population': 1}, 'population must be an integer of at least 2, got 1'),
@@ -144,7 +147,9 @@ def test_a_request_is_checked_with_one_line_reasons() -> None:
             plan(good.replace(**change))
     with pytest.raises(ValueError,
                        match="mode must be one of free, radial, approach, pose, got 'sideways'"):
-        PlanRequest(TARGET, mode='sideways')
+        PlanRequest(Goal(TARGET, mode='sideways'))
+    with pytest.raises(TypeError, match='give mode in the Goal, not beside it'):
+        plan(Goal(TARGET), mode='radial')
     with pytest.raises(TypeError, match='unknown setting.* omeg; a plan takes algorithm'):
         plan(TARGET, omeg=1.0)
     with pytest.raises(TypeError, match='give angular_velocity or its old name omega'):
@@ -235,7 +240,7 @@ def test_deadline_times_out_with_the_best_answer_found(monkeypatch):
     assert result.efficiency == pytest.approx(result.history_efficiency[-1], rel=1e-6)
     assert result.position_error_m == pytest.approx(result.history_error[-1], rel=1e-6)
     asks = itertools.count(1)
-    direct = iepso(Objective(paper_arm(), np.array(FAR), np.zeros(5)), seed=0,
+    direct = iepso(Objective(paper_arm(), Goal(np.array(FAR)), np.zeros(5)), seed=0,
                    interrupt=lambda: 'late' if next(asks) >= 12 else None)
     assert result.joint_goal[:4].tobytes() == direct.x.tobytes()
     assert (result.iterations, result.evaluations) == (direct.nit, direct.nfev)
@@ -296,7 +301,7 @@ def test_a_mirrored_pose_is_an_axis_error_of_twice_the_goal_angle() -> None:
     eps = radial_angle(goal)
     mirrored = _solutions(arm, goal, np.array([-eps]))[0, 1]        # base facing, -eps
     assert arm.within_limits(np.append(mirrored, 0.0))
-    obj = Objective(arm, goal, np.zeros(5), mode='radial')
+    obj = Objective(arm, Goal(goal, mode='radial'), np.zeros(5))
     p, u = obj.tool(mirrored[None, :])
     assert np.linalg.norm(p[0] - goal) < 1e-12                      # the goal is reached ...
     assert obj.axis_angle(u)[0] == pytest.approx(2 * eps)           # ... but not along the ray

@@ -10,6 +10,7 @@ import pytest
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
 from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
 from trajplan_ros.kinematics.urdf_export import urdf_xml
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import DEFAULT_OMEGA, Objective
 from trajplan_ros.search.polish import Linearisation
 from trajplan_ros.search.solution_curve import project_onto_curves, wrap_into
@@ -44,7 +45,7 @@ def test_the_pose_error_is_the_angle_of_the_rotation_between_the_frames() -> Non
     arm = arm_of(UR5)
     rng = np.random.default_rng(5)
     position, quaternion = pose_of(arm, rng.uniform(-2, 2, 6))
-    obj = Objective(arm, position, np.zeros(6), mode='pose', orientation=quaternion)
+    obj = Objective(arm, Goal(position, mode='pose', orientation=quaternion), np.zeros(6))
     goal = rotation_matrix(quaternion)
     for _ in range(20):
         q = rng.normal(size=4)
@@ -64,7 +65,7 @@ def test_a_six_joint_pose_is_the_fastest_of_its_solutions() -> None:
         result = plan(position, start, arm=arm, mode='pose', orientation=quaternion, seed=k)
         assert result.success, result.message
         assert result.position_error_m <= 1e-9 and result.orientation_error_rad <= 1e-9
-        obj = Objective(arm, position, start, mode='pose', orientation=quaternion)
+        obj = Objective(arm, Goal(position, mode='pose', orientation=quaternion), start)
         fastest = obj.motion_time(solutions(obj, rng)).min()
         assert result.motion_time_s <= fastest * (1 + 1e-9), k
 
@@ -89,7 +90,7 @@ def test_a_bad_or_missing_orientation_gets_a_reason() -> None:
         result = plan(position, arm=arm, mode='pose', orientation=orientation)
         assert result.status is PlanStatus.REJECTED
         assert re.search(reason, result.message), result.message
-    with pytest.raises(ValueError, match='an orientation is for pose mode, not free'):
+    with pytest.raises(ValueError, match='an orientation is for pose and approach modes, not fr'):
         plan(position, arm=arm, orientation=(0, 0, 0, 1))
 
 

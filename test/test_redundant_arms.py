@@ -12,6 +12,7 @@ from trajplan_ros.planning import plan
 from trajplan_ros.search import iepso as iepso_module
 from trajplan_ros.search.active_set import (active_pieces, minimax_step, solve_augmented,
                                             sqp_steps)
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import _active_sets, LARGEST, Linearisation, polish
 from trajplan_ros.tools.bench.cases import PUBLISHED
@@ -42,7 +43,7 @@ def _active_set_minimax(b: np.ndarray, null: np.ndarray, quad: np.ndarray, scale
 def drawn_goal(arm: ArmModel, rng: np.random.Generator) -> Objective:
     """Return the objective of the tool position of a random in-limit pose, from another."""
     q = rng.uniform(arm.lower, arm.upper, (2, arm.n_joints))
-    return Objective(arm, arm.tool(q[:1])[0][0], q[1])
+    return Objective(arm, Goal(arm.tool(q[:1])[0][0]), q[1])
 
 
 @pytest.mark.parametrize('vertex_only', [False, True])
@@ -245,7 +246,7 @@ def test_joints_beyond_a_turn_search_the_turn_nearest_the_start() -> None:
     arm = published('ur5')
     start = np.zeros(6)
     start[0] = 6.0
-    obj = Objective(arm, arm.tool(np.full((1, 6), 0.3))[0][0], start)
+    obj = Objective(arm, Goal(arm.tool(np.full((1, 6), 0.3))[0][0]), start)
     assert obj.upper[0] - obj.lower[0] == pytest.approx(2 * np.pi)
     assert obj.lower[0] <= 6.0 <= obj.upper[0] == pytest.approx(2 * np.pi)
     # a goal reached at q1 = -0.3 is reached at q1 = 2 pi - 0.3 too, 0.583 rad from the start
@@ -266,7 +267,7 @@ def test_plans_reach_and_beat_the_pose_the_goal_came_from(name: str) -> None:
         goal = arm.tool(source[None])[0][0]
         result = plan(goal, start, arm=arm, seed=k)
         assert result.success and result.position_error_m <= 1e-9
-        obj = Objective(arm, goal, start)
+        obj = Objective(arm, Goal(goal), start)
         m = obj.arm.planned
         # the source pose reaches the goal too (turned into the search box): never slower
         turned = obj.lower + np.mod(source[:m] - obj.lower, 2 * np.pi)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
 from trajplan_ros.tools.bench.cases import PAPER_TARGET as TARGET
@@ -30,7 +31,7 @@ def test_no_local_search_beats_the_reference():
         goal = ARM.tool(rng.uniform(ARM.lower, ARM.upper, (1, 5)))[0][0]
         start = rng.uniform(ARM.lower, ARM.upper)
         ref = exact_minimum(ARM, goal, start)
-        obj = Objective(ARM, goal, start)
+        obj = Objective(ARM, Goal(goal), start)
         x = polish(obj, rng.uniform(obj.lower, obj.upper, (300, 4)), max_steps=30)
         ev = obj(x)
         reached = ev.error < 1e-10

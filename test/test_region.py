@@ -9,7 +9,8 @@ import pytest
 from trajplan_ros import ArmModel, paper_arm, plan, PlanStatus
 from trajplan_ros.kinematics.rotations import (quaternion_of_turn, quaternions, rotation_matrix,
                                                turn_of_quaternion)
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
 from trajplan_ros.search.region import multipliers, Region, target_gradient
 from trajplan_ros.tools.bench.cases import PUBLISHED
@@ -33,14 +34,14 @@ def _least_time(obj: Objective, x: np.ndarray) -> float:
 def test_the_multipliers_are_the_gradient_of_the_least_time_by_the_goal() -> None:
     arm, start = paper_arm(), np.array([0.3, -0.2, 0.4, 0.1, 0.0])
     result = plan(GOAL, start, seed=2)
-    obj = Objective(arm, GOAL, start)
+    obj = Objective(arm, Goal(GOAL), start)
     x = result.joint_goal[:obj.arm.planned]
     gradient = target_gradient(obj, x, multipliers(obj, x)).shift
     h = 1e-5
     for k in range(3):
         step = h * np.eye(3)[k]
-        ahead = _least_time(Objective(arm, GOAL + step, start), x)
-        behind = _least_time(Objective(arm, GOAL - step, start), x)
+        ahead = _least_time(Objective(arm, Goal(GOAL + step), start), x)
+        behind = _least_time(Objective(arm, Goal(GOAL - step), start), x)
         assert (ahead - behind) / (2 * h) == pytest.approx(gradient[k], rel=1e-3, abs=1e-3)
 
 
@@ -50,7 +51,7 @@ def test_a_position_tolerance_is_a_ball_whose_fastest_point_the_plan_reaches() -
     assert loose.status is PlanStatus.SUCCEEDED, loose.message
     assert loose.position_error_m == pytest.approx(0.01, rel=1e-4)
     assert loose.motion_time_s < exact.motion_time_s * (1 - 1e-3)
-    obj = Objective(paper_arm(), GOAL, np.zeros(5))
+    obj = Objective(paper_arm(), Goal(GOAL), np.zeros(5))
     reference, _ = region_reference(obj, Region(0.01, 0.0), np.random.default_rng(0), 4,
                                     exact.joint_goal[:obj.arm.planned])
     assert loose.motion_time_s <= reference * (1 + 1e-4)
@@ -68,7 +69,7 @@ def test_a_pick_from_above_takes_the_fastest_axis_in_its_cone(
         goal: tuple[float, float, float]) -> None:
     arm = published('so101')
     start = np.clip(np.full(arm.n_joints, 0.3), arm.lower, arm.upper)
-    obj = Objective(arm, np.array(goal), start, mode='approach')
+    obj = Objective(arm, Goal(np.array(goal), mode='approach'), start)
     centre = plan(goal, start, arm=arm, mode='approach', seed=3, axis_tolerance=1e-6)
     before = np.inf
     for tolerance in (0.001, 0.01, 0.05):
@@ -92,7 +93,7 @@ def test_a_cone_whose_fastest_axis_lies_on_another_branch() -> None:
     goal = np.array((0.2, 0.1, 0.02))
     centre = plan(goal, start, arm=arm, mode='approach', seed=3, axis_tolerance=1e-6)
     result = plan(goal, start, arm=arm, mode='approach', seed=3, axis_tolerance=0.01)
-    obj = Objective(arm, goal, start, mode='approach')
+    obj = Objective(arm, Goal(goal, mode='approach'), start)
     reference, _ = region_reference(obj, Region(0.0, 0.01), np.random.default_rng(0), 4,
                                     centre.joint_goal[:obj.arm.planned])
     assert result.motion_time_s <= reference * (1 + 1e-3)
@@ -110,7 +111,7 @@ def test_a_pose_takes_the_fastest_orientation_within_its_tolerance() -> None:
     assert result.status is PlanStatus.SUCCEEDED, result.message
     assert result.orientation_error_rad <= 0.01 and result.position_error_m <= 1e-6
     assert result.motion_time_s < exact.motion_time_s
-    obj = Objective(arm, frame[:3, 3], start, mode='pose', orientation=orientation)
+    obj = Objective(arm, Goal(frame[:3, 3], mode='pose', orientation=orientation), start)
     reference, _ = region_reference(obj, Region(0.0, 0.01), np.random.default_rng(0), 2,
                                     exact.joint_goal)
     assert result.motion_time_s <= reference * (1 + 1e-3)

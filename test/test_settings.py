@@ -63,7 +63,7 @@ def test_defaults_give_the_paper_arm() -> None:
         np.testing.assert_array_equal(getattr(settings.arm, key), getattr(arm, key))
     assert settings.arm.joint_names == arm.joint_names
     r = settings.request
-    assert (r.angular_velocity, r.mode, r.algorithm, r.seed) == (0.2, 'free', 'iepso', 0)
+    assert (r.angular_velocity, r.goal.mode, r.algorithm, r.seed) == (0.2, 'free', 'iepso', 0)
     np.testing.assert_array_equal(settings.start, np.zeros(5))
 
 

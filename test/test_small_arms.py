@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from trajplan_ros import ArmModel, plan, PlanStatus
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.chain_bench import minimax_reference
 
@@ -43,7 +44,7 @@ def test_a_planar_arm_reaches_its_goals_as_fast_as_the_reference() -> None:
     rng = np.random.default_rng(5)
     for k in range(12):
         goal, start = drawn(arm, rng)
-        time, best = minimax_reference(Objective(arm, goal, start), rng, starts=12)
+        time, best = minimax_reference(Objective(arm, Goal(goal), start), rng, starts=12)
         assert best is not None, k
         result = plan(goal, start, arm=arm, seed=k)
         assert result.success, (k, result.message)
@@ -60,7 +61,7 @@ def test_a_joint_that_cannot_move_the_tool_keeps_its_start() -> None:
         result = plan(goal, start, arm=arm, seed=k)
         assert result.success, (k, result.message)
         assert result.joint_goal[1] == start[1], k
-        obj = Objective(arm, goal, start)
+        obj = Objective(arm, Goal(goal), start)
         time, _ = minimax_reference(obj, rng, starts=4)
         assert result.motion_time_s <= time * (1 + 1e-6), k
 
@@ -95,7 +96,7 @@ def test_the_reference_finds_poses_on_two_joint_arms(tip: str) -> None:
     rng = np.random.default_rng(8)
     for _ in range(5):
         goal, start = drawn(arm, rng)
-        time, best = minimax_reference(Objective(arm, goal, start), rng, starts=4)
+        time, best = minimax_reference(Objective(arm, Goal(goal), start), rng, starts=4)
         assert best is not None
-        assert np.linalg.norm(arm.tool(Objective(arm, goal, start).full(best))[0][0]
+        assert np.linalg.norm(arm.tool(Objective(arm, Goal(goal), start).full(best))[0][0]
                               - goal) <= 1e-9

@@ -6,6 +6,7 @@ import pytest
 
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.planning import plan
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.iepso import iepso
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import Linearisation
@@ -21,19 +22,19 @@ SIX = ArmModel.from_dh(a=[0.0, 0.3, 0.25, 0.0, 0.0, 0.05],
 
 
 def test_the_curve_is_the_one_with_one_free_direction() -> None:
-    free = Objective(ARM, TARGET, np.zeros(5))
+    free = Objective(ARM, Goal(TARGET), np.zeros(5))
     assert curve_constraint(free) is free                       # 4 joints, 3 equations
-    radial = curve_constraint(Objective(ARM, TARGET, np.zeros(5), mode='radial'))
+    radial = curve_constraint(Objective(ARM, Goal(TARGET, mode='radial'), np.zeros(5)))
     assert radial is not None and radial.holds_axis                # isolated: the position curve
     assert radial.residuals(radial.tool(np.zeros((1, 4)))).shape == (1, 3)
     goal = SIX.tool(np.full((1, 6), 0.3))[0][0]
-    assert curve_constraint(Objective(SIX, goal, np.zeros(6))) is None     # a 3-D set
-    six_radial = Objective(SIX, goal, np.zeros(6), mode='radial')
+    assert curve_constraint(Objective(SIX, Goal(goal), np.zeros(6))) is None     # a 3-D set
+    six_radial = Objective(SIX, Goal(goal, mode='radial'), np.zeros(6))
     assert curve_constraint(six_radial) is six_radial           # 6 joints, 5 equations
     a, alpha, d = SIX.dh
     five = ArmModel.from_dh(a=a[:5], alpha=alpha[:5], d=d[:5], lower=SIX.lower[:5],
                             upper=SIX.upper[:5])
-    five_radial = curve_constraint(Objective(five, goal, np.zeros(5), mode='radial'))
+    five_radial = curve_constraint(Objective(five, Goal(goal, mode='radial'), np.zeros(5)))
     assert five_radial is not None and len(five_radial.across_basis) == 1   # 5 joints, 4 eq.
 
 
@@ -47,7 +48,7 @@ def test_radial_solutions_of_five_joints_lie_on_the_curves_the_search_follows() 
     goal = np.array([-0.07303910861673123, 0.2299873797151327, 0.05734364533472099])
     start = np.array([3.0198148588251126, -2.4543658758197253, -2.3607509064981707,
                       -1.3615416349911378, 3.9155382326024846, -2.4114416844099265])
-    obj = Objective(arm, goal, start, mode='radial')
+    obj = Objective(arm, Goal(goal, mode='radial'), start)
     curve = curve_constraint(obj)
     assert obj.arm.planned == 5 and len(curve.across_basis) == 1
     probes = np.random.default_rng(0).uniform(obj.lower, obj.upper, (3000, 5))
@@ -64,7 +65,7 @@ def test_radial_solutions_of_five_joints_lie_on_the_curves_the_search_follows() 
 
 
 def test_follow_walks_along_the_solutions_both_ways() -> None:
-    obj = Objective(ARM, TARGET, np.zeros(5))
+    obj = Objective(ARM, Goal(TARGET), np.zeros(5))
     x = exact_minimum(ARM, TARGET, np.zeros(5)).joint_goal
     along = follow(obj, x[None, :], 0.3, 6)
     assert along.shape == (1, 13, 4)
@@ -75,7 +76,7 @@ def test_follow_walks_along_the_solutions_both_ways() -> None:
 
 
 def test_limit_crossings_are_where_a_chord_enters_and_leaves_the_limits() -> None:
-    obj = Objective(ARM, TARGET, np.zeros(5))
+    obj = Objective(ARM, Goal(TARGET), np.zeros(5))
     lo = obj.lower
     a = np.array([[lo[0] - 0.1, 0, 0, 0], [0, 0, 0, 0], [lo[0] - 0.2, 0, 0, 0]])
     b = np.array([[lo[0] + 0.1, 0, 0, 0], [0.1, 0, 0, 0], [lo[0] - 0.05, 0, 0, 0]])
@@ -106,7 +107,7 @@ OTHER_BRANCH_CASES = [
 @pytest.mark.parametrize('mode, goal, start, seed, on_limit', OTHER_BRANCH_CASES)
 def test_the_curve_search_finds_solutions_no_swarm_visited(mode, goal, start, seed,
                                                            on_limit) -> None:
-    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    obj = Objective(ARM, Goal(np.array(goal), mode=mode), np.array(start))
     ref = exact_minimum(ARM, np.array(goal), np.array(start), mode=mode)
     without = iepso(obj, seed=seed, curve_search=0)
     assert without.motion_time > ref.motion_time_s * 1.01 or without.error > 1e-6
@@ -120,7 +121,7 @@ def test_the_curve_search_finds_solutions_no_swarm_visited(mode, goal, start, se
 
 def test_seeds_are_in_limit_points_near_the_curves_and_distinct() -> None:
     mode, goal, start, seed, _ = OTHER_BRANCH_CASES[0]
-    obj = Objective(ARM, np.array(goal), np.array(start), mode=mode)
+    obj = Objective(ARM, Goal(np.array(goal), mode=mode), np.array(start))
     probes = np.random.default_rng(0).uniform(obj.lower, obj.upper, (16, 4))
     seeds = curve_seeds(obj, probes, None)
     assert len(seeds) >= 2
@@ -130,7 +131,7 @@ def test_seeds_are_in_limit_points_near_the_curves_and_distinct() -> None:
     assert np.all(apart >= 0.25)                                  # one seed per minimum
     assert len(curve_seeds(obj, probes, seeds[0])) < len(seeds)   # only where faster
     goal6 = SIX.tool(np.full((1, 6), 0.3))[0][0]
-    free6 = Objective(SIX, goal6, np.zeros(6))
+    free6 = Objective(SIX, Goal(goal6), np.zeros(6))
     assert curve_seeds(free6, np.full((1, 6), 0.3), None).shape == (0, 6)
 
 

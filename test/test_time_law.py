@@ -13,6 +13,7 @@ import ruckig
 from trajplan_ros import ArmModel, paper_arm
 from trajplan_ros.motion.time_law import (JERK_LIMITED, joint_reach, joint_time, motion_times,
                                           SERVO, servo_law, tie_scales, TimeLaw, TRAPEZOIDAL)
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import linearise_at
 
@@ -37,7 +38,7 @@ def test_the_servo_law_is_eq_10() -> None:
 def test_every_motion_time_of_the_core_comes_from_the_objectives_law() -> None:
     # the objective, its linearisation and the fuzzy rules' longest time all read the law;
     # given a law twice as fast, the linearisation's motion times halve
-    obj = Objective(velocity_limited_arm(), [0.15, 0.19, 0.17], np.zeros(5))
+    obj = Objective(velocity_limited_arm(), Goal([0.15, 0.19, 0.17]), np.zeros(5))
     np.testing.assert_array_equal(obj.law.velocity, [0.2, 0.05, 0.2, 0.1])
     x = np.random.default_rng(1).uniform(obj.lower, obj.upper, (20, 4))
     expected = np.max(np.abs(x) / obj.law.velocity, axis=1)

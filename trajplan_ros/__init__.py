@@ -13,7 +13,7 @@ The package is layered; each layer uses only those listed before it:
   skip, the scene, the distances (coal) and the continuous check of a motion;
 * ``search``: the objective (eq. 9-14), the fuzzy term, IEPSO and its peers, the polish, the
   solution curves and the search for a free joint goal;
-* ``planning``: ``plan``, its request (``PlanRequest``) and result;
+* ``planning``: ``plan``, its request (``PlanRequest``, holding a ``Goal``) and result;
 * ``ros``: the ROS 2 node (the only layer besides ``tools`` that imports rclpy);
 * ``tools``: the ``trajplan`` command, benchmarks and their reference oracles, figures, the demo.
 
@@ -24,14 +24,14 @@ from trajplan_ros.collision.errors import InvalidCollisionInput
 from trajplan_ros.collision.scene import Scene
 from trajplan_ros.kinematics import ArmModel, InvalidArmModel, paper_arm
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE, DEFAULT_TOLERANCE,
-                                   InvalidRequest, JointLimits, Mode, motion_trajectory,
+                                   Goal, InvalidRequest, JointLimits, Mode, motion_trajectory,
                                    MotionProfile, Objective, plan, PlanRequest, PlanResult,
                                    PlanStatus, Profile, read_joint_limits, RewardPunishment,
                                    servo_trajectory, Timing, Trajectory, trajectory_points)
 
 __all__ = [
     'ALGORITHMS', 'ArmCollision', 'ArmModel', 'CollisionWorld', 'DEFAULT_AXIS_TOLERANCE',
-    'DEFAULT_TOLERANCE', 'InvalidArmModel', 'InvalidCollisionInput', 'Scene',
+    'DEFAULT_TOLERANCE', 'Goal', 'InvalidArmModel', 'InvalidCollisionInput', 'Scene',
     'InvalidRequest', 'JointLimits', 'Mode', 'MotionProfile', 'Objective', 'PlanRequest',
     'PlanResult', 'PlanStatus', 'Profile', 'RewardPunishment', 'Timing', 'Trajectory',
     'motion_trajectory', 'paper_arm', 'plan', 'read_joint_limits', 'servo_trajectory',

@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from enum import Enum
 import time
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -38,16 +38,16 @@ from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import TimeLaw
 from trajplan_ros.motion.trajectory import path_points, path_trajectory, Trajectory
-from trajplan_ros.planning.request import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_TOLERANCE, PlanRequest)
+from trajplan_ros.planning.request import ALGORITHMS, PlanRequest
 from trajplan_ros.search.detour import detour
 from trajplan_ros.search.free_goal import free_joint_goal
-from trajplan_ros.search.objective import DEFAULT_OMEGA, InvalidRequest, Mode, Objective
+from trajplan_ros.search.goal import Goal, InvalidRequest, Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Objective
 from trajplan_ros.search.optimize import Interrupt, OptimizeResult
 from trajplan_ros.search.region import Region, within_tolerances
 
-__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_TOLERANCE', 'PlanRequest',
-           'PlanResult', 'PlanStatus', 'describe_goal', 'describe_residual', 'plan', 'prepare']
+__all__ = ['ALGORITHMS', 'PlanRequest', 'PlanResult', 'PlanStatus', 'describe_goal',
+           'describe_residual', 'plan', 'prepare']
 
 #: The clock of ``max_planning_time`` (s), a module attribute so that tests can replace it.
 _clock: Callable[[], float] = time.monotonic
@@ -188,18 +188,21 @@ def plan(request: PlanRequest | Sequence[float], start: Sequence[float] | None =
     request.validate()
     if stop is not None and not callable(stop):
         raise ValueError(f'stop must be None or a callable returning bool, got {stop!r}')
-    r = request
+    r, goal = request, request.goal
     arm = r.planned_arm
     clock, interrupt = time.perf_counter(), _interrupt(r.max_planning_time, stop)
-    common = {'goal': r.goal, 'algorithm': r.algorithm, 'mode': r.mode.value,
+    common = {'goal': goal.position, 'algorithm': r.algorithm, 'mode': goal.mode.value,
               'angular_velocity': float(r.angular_velocity), 'motion': r.motion}
-    if r.joint_goal is not None:
+    if goal.frame not in ('', arm.base_link):
+        return PlanResult(PlanStatus.REJECTED, f"the goal is in frame '{goal.frame}': plan "
+                          f"takes goals in the base frame '{arm.base_link}' (Goal.moved)",
+                          start=None, **{**common, 'goal': np.full(3, np.nan)})
+    if goal.joint_goal is not None:
         return _to_joint_goal(r, clock, interrupt, common)
     try:
         start = r.start if r.start is not None else np.zeros(arm.n_joints)    # upright: q = 0
-        obj = Objective(arm, r.goal, start, mode=r.mode, omega=r.angular_velocity,
-                        shaping=r.shaping, profile=r.motion, approach=r.approach,
-                        orientation=r.orientation, start_margin=r.start_limit_margin)
+        obj = Objective(arm, goal, start, omega=r.angular_velocity, shaping=r.shaping,
+                        profile=r.motion, start_margin=r.start_limit_margin)
         _check_world(r.world, obj.goal)
         common.update(joint_names=tuple(arm.joint_names),
                       law=r.motion.time_law(arm, r.angular_velocity))
@@ -234,8 +237,9 @@ def _search(obj: Objective, r: PlanRequest,
     if one is not None:
         found = search(one)
         tool = one.tool(found.x[None])
-        if (found.interrupted is not None or (np.linalg.norm(tool[0, 0] - obj.goal) <= r.tolerance
-                                              and one.axis_angle(tool[1])[0] <= r.axis_limit)):
+        if (found.interrupted is not None
+                or (np.linalg.norm(tool[0, 0] - obj.goal) <= r.goal.tolerance
+                    and one.axis_angle(tool[1])[0] <= r.goal.axis_limit)):
             return one, found
     return obj, search(obj)
 
@@ -252,7 +256,7 @@ def _fastest_within(obj: Objective, found: OptimizeResult, r: PlanRequest) -> Op
                         obj.target_name)
     if status is not PlanStatus.SUCCEEDED:
         return found
-    x = within_tolerances(obj, found.x, Region(r.tolerance, r.angle_limit))
+    x = within_tolerances(obj, found.x, Region(r.goal.tolerance, r.goal.angle_limit))
     if x is found.x:
         return found
     ev = obj(x[None])
@@ -272,11 +276,11 @@ def _to_joint_goal(r: PlanRequest, clock: float, interrupt: Interrupt | None,
     arm = r.planned_arm.every_joint_planned()
     try:
         start = r.start if r.start is not None else np.zeros(arm.n_joints)
-        q = _checked_joint_goal(r.planned_arm, r.joint_goal, start)
+        q = _checked_joint_goal(r.planned_arm, r.goal.joint_goal, start)
         tip = arm.frames(q[None])[0, -1]
-        obj = Objective(arm, arm.tool(q[None])[0][0], start, mode=Mode.POSE,
-                        omega=r.angular_velocity, profile=r.motion,
-                        orientation=quaternions(tip[None, :3, :3])[0],
+        pose = Goal(arm.tool(q[None])[0][0], Mode.POSE,
+                    orientation=quaternions(tip[None, :3, :3])[0])
+        obj = Objective(arm, pose, start, omega=r.angular_velocity, profile=r.motion,
                         start_margin=r.start_limit_margin)
         common.update(goal=obj.goal, joint_names=tuple(arm.joint_names),
                       law=r.motion.time_law(arm, r.angular_velocity))
@@ -294,12 +298,26 @@ def _to_joint_goal(r: PlanRequest, clock: float, interrupt: Interrupt | None,
     return result
 
 
-def _checked_joint_goal(arm: ArmModel, joint_goal: np.ndarray, start: np.ndarray) -> np.ndarray:
+def _checked_joint_goal(arm: ArmModel, joint_goal: np.ndarray | Mapping[str, float],
+                        start: np.ndarray) -> np.ndarray:
     """
     Return a joint goal as every joint's angle (InvalidRequest: why it cannot be one).
 
-    Given the planned joints only, the held ones keep their ``start``.
+    Given the planned joints only, or angles by name, the others keep their ``start`` (within
+    the limits).
     """
+    if isinstance(joint_goal, Mapping):
+        unknown = sorted(set(joint_goal) - set(arm.joint_names))
+        if unknown:
+            raise InvalidRequest(f"joint goal names {', '.join(unknown)}; the arm's joints are "
+                                 f"{', '.join(arm.joint_names)}")
+        try:
+            q = np.clip(arm.full_start(start), arm.lower, arm.upper)
+        except ValueError as exc:
+            raise InvalidRequest(str(exc)) from None
+        for name, angle in joint_goal.items():
+            q[arm.joint_names.index(name)] = angle
+        joint_goal = q
     try:
         q = arm.full_start(joint_goal)
     except ValueError as exc:
@@ -338,7 +356,7 @@ def _joint_goal_clear(result: PlanResult, obj: Objective, r: PlanRequest,
                reached='reached the joint goal')
         return
     rng = r.seed if isinstance(r.seed, np.random.Generator) else np.random.default_rng(r.seed)
-    around = (detour(obj, world, result.law, r.motion.timing, q[None], rng, r.tolerance,
+    around = (detour(obj, world, result.law, r.motion.timing, q[None], rng, r.goal.tolerance,
                      interrupt, more_goals=False) if r.detours else None)
     if around is not None:
         _moved(result, obj, around.x, around.duration, np.nan if around.vias else
@@ -370,12 +388,13 @@ def _collision_free(result: PlanResult, obj: Objective, r: PlanRequest, clock: f
     world, seed = r.world, r.seed
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x0 = result.joint_goal[:obj.arm.planned]
-    found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng, r.tolerance)
+    found = free_joint_goal(obj, world, result.law, result.motion.timing, x0, rng,
+                            r.goal.tolerance)
     result.clearance_m, result.clearance_pair = found.clearance.clearance, found.clearance.pair
     around = None
     if found.x is None and r.detours:
         around = detour(obj, world, result.law, result.motion.timing, found.goals, rng,
-                        r.tolerance, interrupt)
+                        r.goal.tolerance, interrupt)
     if around is not None:
         efficiency = float(obj(around.x[None]).efficiency[0]) if not around.vias else np.nan
         _moved(result, obj, around.x, around.duration, efficiency, around.clearance, around.vias)
@@ -463,19 +482,20 @@ def _status(found: OptimizeResult, limits: PlanRequest, pos_err: float, axis_err
                                       f'{pos_err:.3g} m')
     if found.interrupted == PlanStatus.CANCELLED:
         return PlanStatus.CANCELLED, 'planning stopped before the end'
-    what, name = (('orientation', 'orientation_tolerance') if limits.mode is Mode.POSE
+    goal = limits.goal
+    what, name = (('orientation', 'orientation_tolerance') if goal.mode is Mode.POSE
                   else ('axis', 'axis_tolerance'))
     axis = ('' if np.isnan(axis_err) else
             f", {what} {describe_residual(axis_err, 'rad')} from {target}")
-    if pos_err > limits.tolerance:
+    if pos_err > goal.tolerance:
         return PlanStatus.NOT_REACHED, (f'goal not reached: best position error {pos_err:.3g} m '
-                                        f'is above the tolerance {limits.tolerance:.3g} m{axis}')
-    if axis_err > limits.angle_limit:
-        best, kind = (('orientation', 'pose') if limits.mode is Mode.POSE
-                      else ('tool axis', f'{limits.mode.value} pose'))
+                                        f'is above the tolerance {goal.tolerance:.3g} m{axis}')
+    if axis_err > goal.angle_limit:
+        best, kind = (('orientation', 'pose') if goal.mode is Mode.POSE
+                      else ('tool axis', f'{goal.mode.value} pose'))
         return PlanStatus.NOT_REACHED, (
             f'no {kind} found: the best {best} is {axis_err:.3g} rad from '
-            f'{target} ({name} {limits.angle_limit:.3g} rad), position error '
+            f'{target} ({name} {goal.angle_limit:.3g} rad), position error '
             f'{pos_err:.3g} m')
     return (PlanStatus.SUCCEEDED,
             f'reached in {found.motion_time:.4f} s of motion, error '
@@ -553,10 +573,11 @@ def prepare(*requests: PlanRequest,
             arm = request.planned_arm
             middle = (arm.lower + arm.upper) / 2
             frame = arm.frames(np.where(np.isfinite(middle), middle, 0.0))[0, -1]
-            orientation = (quaternions(frame[None, :3, :3])[0] if request.mode is Mode.POSE
-                           else request.orientation)
-            plan(request.replace(goal=frame[:3, 3], start=None, seed=0, max_planning_time=None,
-                                 orientation=orientation, world=None,
+            goal = request.goal
+            orientation = (quaternions(frame[None, :3, :3])[0] if goal.mode is Mode.POSE
+                           else goal.orientation)
+            goal = goal.replace(position=frame[:3, 3], orientation=orientation, joint_goal=None)
+            plan(request.replace(goal=goal, start=None, seed=0, max_planning_time=None, world=None,
                                  population=_DEFAULTS.population,
                                  max_iterations=_DEFAULTS.max_iterations))
             if request.world is not None:

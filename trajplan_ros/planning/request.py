@@ -3,12 +3,12 @@
 """
 ``PlanRequest``: everything one plan needs, under the names users know, and its checking.
 
-The goal and start, the arm, the mode, the motion's profile and the collision world; the
-search's settings (algorithm, swarm size, iteration cap, convergence precision, seed, fuzzy
-shaping, optimiser options); the limits on its work (``max_planning_time``). The names are the
-node's parameters and the ``trajplan plan`` flags: ``angular_velocity`` (``--angular-velocity``),
-``max_iterations``, ``tolerance``, ``axis_tolerance``, ``orientation_tolerance``,
-``max_planning_time``.
+The goal (``Goal``: its kind, target, tolerances and frame) and start, the arm, the motion's
+profile and the collision world; the search's settings (algorithm, swarm size, iteration cap,
+convergence precision, seed, fuzzy shaping, optimiser options); the limits on its work
+(``max_planning_time``). The names are the node's parameters and the ``trajplan plan`` flags:
+``angular_velocity`` (``--angular-velocity``), ``max_iterations``, ``max_planning_time``, and
+the goal's ``mode``, ``tolerance``, ``axis_tolerance``, ``orientation_tolerance``.
 
 ``validate`` refuses settings with a one-line reason (ValueError); a goal or start the arm
 cannot take is not a settings error: ``plan`` answers it REJECTED, with the reason.
@@ -28,30 +28,23 @@ from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.motion.motion_profile import MotionProfile, SCALING_KEYS
 from trajplan_ros.search.baselines import de, ga, pso, spso
 from trajplan_ros.search.fuzzy import RewardPunishment
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.iepso import iepso
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN, unit_direction
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 from trajplan_ros.search.optimize import OptimizeResult
 
-__all__ = ['ALGORITHMS', 'DEFAULT_AXIS_TOLERANCE', 'DEFAULT_ORIENTATION_TOLERANCE',
-           'DEFAULT_TOLERANCE', 'PlanRequest', 'RENAMED']
+__all__ = ['ALGORITHMS', 'GOAL_SETTINGS', 'PlanRequest', 'RENAMED']
 
 #: Name -> optimiser; every one takes (objective, population=, max_iter=, tol=, seed=).
 ALGORITHMS: dict[str, Callable[..., OptimizeResult]] = {
     'iepso': iepso, 'pso': pso, 'spso': spso, 'ga': ga, 'de': de,
 }
-#: Largest error (m) that counts as reached unless the caller says otherwise.
-DEFAULT_TOLERANCE = 1e-6
-#: Largest angle (rad) between the tool axis and its target that counts as met, by mode: the
-#: goal ray of the paper's radial mode is met exactly; an approach direction within 1 mrad,
-#: as a small arm's URDF axes, off by micro-radians, often cannot point exactly along it.
-DEFAULT_AXIS_TOLERANCE = MappingProxyType({Mode.RADIAL.value: 1e-6, Mode.APPROACH.value: 1e-3})
-#: Largest angle (rad) of the rotation between a pose's goal orientation and the reached one
-#: that counts as met: a six- or seven-joint arm meets a pose exactly.
-DEFAULT_ORIENTATION_TOLERANCE = 1e-6
 #: Earlier keyword names of ``plan`` -> the request's names (the old ones keep working).
 RENAMED = MappingProxyType({'omega': 'angular_velocity', 'max_iter': 'max_iterations',
                             'tol': 'convergence_precision', 'profile': 'motion',
                             'options': 'optimizer_options'})
+#: ``Goal``'s settings, which ``plan``'s keywords may give beside a position.
+GOAL_SETTINGS = frozenset(f.name for f in fields(Goal)) - {'position'}
 #: The optimisers' keywords that the request sets itself, not through ``optimizer_options``.
 _OWN_KEYWORDS = frozenset({'population', 'max_iter', 'tol', 'seed', 'interrupt'})
 
@@ -67,32 +60,15 @@ class PlanRequest:
     """
     One planning request: the goal, where the arm starts, and every setting of the plan.
 
-    :param goal: tool position (x, y, z), m, in the arm's base frame.
+    :param goal: the goal (``Goal``), or a tool position (x, y, z), m, in the arm's base
+        frame: a point goal.
     :param start: all joint angles now (rad); None: the upright pose q = 0.
     :param arm: the arm model; None: the paper's arm.
-    :param mode: "free" (position only), "radial" (eq. 12-13: the tool axis along the goal
-        ray, pointing outward, too), "approach" (the tool axis along ``approach``) or "pose"
-        (the tool frame's whole orientation is ``orientation``).
-    :param approach: approach mode: the direction the tool axis points along (base frame; need
-        not be a unit vector); the default (0, 0, -1) is a grasp from above.
-    :param orientation: pose mode: the tool (tip) frame's orientation in the base frame, a
-        unit quaternion (x, y, z, w).
-    :param joint_goal: a joint goal instead: every joint's angle (rad), or the planned ones
-        (the others keep their start); the plan is the motion there, direct or, with a
-        ``world`` and ``detours``, through via points. ``goal`` is then not read (give ()),
-        nor the mode's orientation settings.
     :param motion: the motion's profile, timing and limits; the plan minimises its duration.
     :param angular_velocity: the servo angular velocity omega of eq. (10), rad/s; it caps every
         joint's velocity.
     :param world: the arm's collision model, scene and padding: the plan is the fastest direct
         motion found that keeps the padding. None: no collision check.
-    :param tolerance: largest position error (m). The tolerances make the goal a region: the
-        plan is the fastest motion found to any point, axis or orientation within them
-        (``search.region``); at 1e-6 or less they are the goal itself.
-    :param axis_tolerance: radial and approach modes: largest angle (rad) of the tool axis to
-        the goal ray or the approach direction; None: the mode's ``DEFAULT_AXIS_TOLERANCE``.
-    :param orientation_tolerance: pose mode: largest angle (rad) of the rotation between the
-        goal orientation and the reached one.
     :param algorithm: "iepso" (the planner), or "pso", "spso", "ga", "de" to compare.
     :param population: swarm (or population) size.
     :param max_iterations: iteration cap.
@@ -109,19 +85,12 @@ class PlanRequest:
         bringing it inside, with a note in the message; further out, the request is REJECTED.
     """
 
-    goal: Sequence[float]
+    goal: Goal | Sequence[float]
     start: Sequence[float] | None = None
     arm: ArmModel | None = None
-    mode: Mode | str = Mode.FREE
-    approach: Sequence[float] = TOP_DOWN
-    orientation: Sequence[float] | None = None
-    joint_goal: Sequence[float] | None = None
     motion: MotionProfile = field(default_factory=MotionProfile)
     angular_velocity: float = DEFAULT_OMEGA
     world: CollisionWorld | None = None
-    tolerance: float = DEFAULT_TOLERANCE
-    axis_tolerance: float | None = None
-    orientation_tolerance: float = DEFAULT_ORIENTATION_TOLERANCE
     algorithm: str = 'iepso'
     population: int = 40
     max_iterations: int = 1000
@@ -134,28 +103,21 @@ class PlanRequest:
     detours: bool = True
 
     def __post_init__(self) -> None:
-        """Hold the goal as floats (ValueError if it is not numbers) and the mode as a Mode."""
-        object.__setattr__(self, 'goal', np.asarray(self.goal, dtype=float).ravel())
-        for name in ('start', 'joint_goal'):
-            if getattr(self, name) is not None:
-                value = np.asarray(getattr(self, name), dtype=float).ravel()
-                object.__setattr__(self, name, value)
-        if self.mode not in tuple(Mode) + tuple(m.value for m in Mode):
-            raise ValueError(f"mode must be one of {', '.join(m.value for m in Mode)}, "
-                             f'got {self.mode!r}')
-        object.__setattr__(self, 'mode', Mode(self.mode))
-        object.__setattr__(self, 'approach', tuple(float(v) for v in np.ravel(self.approach)))
-        if self.orientation is not None:
-            object.__setattr__(self, 'orientation',
-                               tuple(float(v) for v in np.ravel(self.orientation)))
+        """Hold a position as a point goal (ValueError if not numbers), the start as floats."""
+        if not isinstance(self.goal, Goal):
+            object.__setattr__(self, 'goal', Goal(self.goal))
+        if self.start is not None:
+            object.__setattr__(self, 'start', np.asarray(self.start, dtype=float).ravel())
 
     @classmethod
-    def from_keywords(cls, goal: Sequence[float], start: Sequence[float] | None = None,
+    def from_keywords(cls, goal: Goal | Sequence[float], start: Sequence[float] | None = None,
                       **settings: Any) -> PlanRequest:
         """
         Return the request of ``plan``'s keywords; the names of ``RENAMED`` are taken too.
 
-        ``velocity_scaling`` and ``acceleration_scaling`` set the motion's (``MotionProfile``).
+        The goal's settings (``GOAL_SETTINGS``: ``mode``, ``tolerance``, ...) given beside a
+        position make its ``Goal``; ``velocity_scaling`` and ``acceleration_scaling`` set the
+        motion's (``MotionProfile``).
         """
         for old, new in RENAMED.items():
             if old in settings:
@@ -167,31 +129,24 @@ class PlanRequest:
         scaling = {k: settings.pop(k) for k in SCALING_KEYS if k in settings}
         if scaling:              # the motion's own settings, given beside it
             settings['motion'] = replace(settings.get('motion', MotionProfile()), **scaling)
+        wanted = {k: settings.pop(k) for k in GOAL_SETTINGS if k in settings}
+        if wanted:
+            if isinstance(goal, Goal):
+                raise TypeError(f"give {', '.join(sorted(wanted))} in the Goal, not beside it")
+            goal = Goal(goal, **wanted)
         if settings.get('optimizer_options') is None:
             settings.pop('optimizer_options', None)
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(settings) - known)
         if unknown:
             raise TypeError(f"unknown setting(s) {', '.join(unknown)}; a plan takes "
-                            f"{', '.join(sorted(known - {'goal', 'start'}))}")
+                            f"{', '.join(sorted(known - {'goal', 'start'} | GOAL_SETTINGS))}")
         return cls(goal, start, **settings)
 
     @property
     def planned_arm(self) -> ArmModel:
         """Return the arm planned for: ``arm``, or the paper's when it is None."""
         return self.arm if self.arm is not None else _paper_arm()
-
-    @property
-    def angle_limit(self) -> float:
-        """Return the largest angle error that counts as met: the pose's, or ``axis_limit``."""
-        return self.orientation_tolerance if self.mode is Mode.POSE else self.axis_limit
-
-    @property
-    def axis_limit(self) -> float:
-        """Return the axis tolerance in force: ``axis_tolerance``, or the mode's default."""
-        if self.axis_tolerance is not None:
-            return self.axis_tolerance
-        return DEFAULT_AXIS_TOLERANCE.get(self.mode.value, DEFAULT_AXIS_TOLERANCE['radial'])
 
     def replace(self, **changes: Any) -> PlanRequest:
         """Return a copy with ``changes`` (as ``dataclasses.replace``)."""
@@ -202,9 +157,8 @@ class PlanRequest:
         if self.algorithm not in ALGORITHMS:
             raise ValueError(f'unknown algorithm {self.algorithm!r}; choose from '
                              f"{', '.join(ALGORITHMS)}")
-        positive = {'angular_velocity': self.angular_velocity, 'tolerance': self.tolerance,
-                    'axis_tolerance': self.axis_limit,
-                    'orientation_tolerance': self.orientation_tolerance}
+        self.goal.validate()
+        positive = {'angular_velocity': self.angular_velocity}
         if self.max_planning_time is not None:
             positive['max_planning_time'] = self.max_planning_time
         for name, value in positive.items():
@@ -227,9 +181,6 @@ class PlanRequest:
         self._check_options()
         if not isinstance(self.detours, bool):
             raise ValueError(f'detours must be true or false, got {self.detours!r}')
-        unit_direction(self.approach)
-        if self.orientation is not None and self.mode is not Mode.POSE:
-            raise ValueError(f'an orientation is for pose mode, not {self.mode.value}')
         arm = self.planned_arm
         if self.world is not None and self.world.arm.geometry.arm.joint_names != arm.joint_names:
             raise ValueError(f'the collision model is of joints '

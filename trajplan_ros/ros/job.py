@@ -10,14 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import Header
 from trajplan_ros.collision.free_motion import colliding_pairs
-from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
-from trajplan_ros.planning import Mode, plan, PlanRequest, PlanResult, PlanStatus, Trajectory
+from trajplan_ros.planning import Goal, Mode, plan, PlanResult, PlanStatus, Trajectory
 from trajplan_ros.planning.planner import describe_goal
 from trajplan_ros.ros.joint_states import PlanStart
 from trajplan_ros.ros.mailbox import Job
@@ -25,7 +24,8 @@ from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
-__all__ = ['Outcome', 'describe_arm', 'frame_problem', 'rotation_problem', 'run']
+__all__ = ['Outcome', 'describe_arm', 'frame_problem', 'in_base', 'message_goal',
+           'rotation_problem', 'run']
 
 
 def describe_arm(settings: Settings) -> str:
@@ -75,6 +75,13 @@ def frame_problem(frame: str, settings: Settings) -> str | None:
     return None
 
 
+def _describe_joints(joint_goal: np.ndarray | Mapping[str, float]) -> str:
+    """Write a joint goal for the log: its angles, or its angles by name."""
+    if isinstance(joint_goal, Mapping):
+        return '{' + ', '.join(f'{name}: {angle:.6g}' for name, angle in joint_goal.items()) + '}'
+    return describe_goal(joint_goal)
+
+
 def rotation_problem(orientation: Sequence[float]) -> str | None:
     """Return why a quaternion (x, y, z, w) is not a rotation, or None."""
     if all(map(math.isfinite, orientation)) and any(orientation):
@@ -82,39 +89,34 @@ def rotation_problem(orientation: Sequence[float]) -> str | None:
     return f'the goal orientation {list(orientation)} is not a rotation (x, y, z, w)'
 
 
-def goal_orientation(job: Job, settings: Settings) -> str:
-    """Return how the job's orientation is used: its own choice, else the parameter's."""
-    return job.goal_orientation or settings.goal_orientation
-
-
-def in_base(job: Job, settings: Settings,
-            start: PlanStart) -> tuple[np.ndarray, np.ndarray | None]:
+def message_goal(settings: Settings, position: Sequence[float], frame: str = '',
+                 orientation: Sequence[float] | None = None,
+                 tolerance: float | None = None) -> Goal:
     """
-    Return the job's goal in the base frame, and its orientation there (3x3, or None).
+    Return the goal of a topic message or a GetPlan call, in its frame.
 
-    The orientation of a pose goal, unless ``goal_orientation`` is ignore. The robot's own
-    forward kinematics at ``start`` poses the goal's frame.
+    Its point, and a pose's orientation as ``goal_orientation`` says (ignored; the tool axis
+    along its z axis; or the whole pose); the kind and tolerances the parameters give, a
+    call's positive ``tolerance`` instead of theirs.
     """
+    template = settings.request.goal
+    goal = template.replace(position=position, frame=frame,
+                            tolerance=tolerance or template.tolerance)
+    how = settings.goal_orientation
+    if how == 'ignore' or orientation is None:
+        return goal
+    q = np.asarray(orientation, dtype=float)
+    if rotation_problem(orientation) is None:          # else kept as given, to be refused
+        q = q / np.linalg.norm(q)
+    return goal.replace(mode=Mode.POSE if how == 'pose' else Mode.APPROACH, orientation=q)
+
+
+def in_base(goal: Goal, settings: Settings, start: PlanStart) -> Goal:
+    """Return ``goal`` in the base frame (its frame posed by forward kinematics at ``start``)."""
     s = settings
-    rotation = None
-    if goal_orientation(job, s) != 'ignore' and job.orientation is not None:
-        q = np.asarray(job.orientation, dtype=float)      # a rotation: goal_problem checked
-        rotation = rotation_matrix(q / np.linalg.norm(q))
-    if job.frame in ('', s.base_frame):
-        return np.asarray(job.goal, dtype=float), rotation
-    pose = s.frames.to_base(job.frame, dict(zip(s.arm.joint_names, start.q)))
-    goal = pose[:3, :3] @ np.asarray(job.goal, dtype=float) + pose[:3, 3]
-    return goal, None if rotation is None else pose[:3, :3] @ rotation
-
-
-def _pointed(request: PlanRequest, rotation: np.ndarray | None,
-             goal_orientation: str) -> PlanRequest:
-    """Return the request with a pose goal's orientation (base frame) as the node uses it."""
-    if rotation is None:
-        return request
-    if goal_orientation == 'approach':
-        return request.replace(mode=Mode.APPROACH, approach=rotation[:, 2])
-    return request.replace(mode=Mode.POSE, orientation=quaternions(rotation[None])[0])
+    if goal.frame in ('', s.base_frame):
+        return goal.replace(frame='')
+    return goal.moved(s.frames.to_base(goal.frame, dict(zip(s.arm.joint_names, start.q))))
 
 
 def run(job: Job, settings: Settings, start: PlanStart, header: Header,
@@ -125,21 +127,15 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
     A goal in another frame is brought into the base frame first (``job.goal`` then holds it).
     """
     s = settings
-    goal, rotation = in_base(job, s, start)
-    moved = f" (in '{job.frame}': {describe_goal(job.goal)} m)" if job.frame not in (
-        '', s.base_frame) else ''
-    job.goal = tuple(goal.tolist())
-    request = s.request.replace(goal=job.goal, start=start.q,
-                                tolerance=job.tolerance or s.request.tolerance,
-                                **job.request_changes)
-    if job.joint_goal:
-        q = np.clip(start.q, s.arm.lower, s.arm.upper)   # joints not named: where they are
-        for name, angle in job.joint_goal.items():
-            q[s.arm.joint_names.index(name)] = angle
-        request = request.replace(joint_goal=q)
-        what = f'{job.label} to joint goal {describe_goal(q)} rad'
+    given = job.goal
+    job.goal = goal = in_base(given, s, start)
+    request = s.request.replace(goal=goal, start=start.q, **job.request_changes)
+    if goal.joint_goal is not None:
+        what = f'{job.label} to joint goal {_describe_joints(goal.joint_goal)} rad'
     else:
-        what = f'{job.label} {describe_goal(job.goal)} m{moved}'
+        moved = (f" (in '{given.frame}': {describe_goal(given.position)} m)"
+                 if given.frame not in ('', s.base_frame) else '')
+        what = f'{job.label} {describe_goal(goal.position)} m{moved}'
     where = f'{what} from q = {describe_goal(start.q)} rad{start.describe()}'
     touching = (colliding_pairs(s.world, start.q)
                 if job.start_must_be_free and s.world is not None else '')
@@ -147,9 +143,9 @@ def run(job: Job, settings: Settings, start: PlanStart, header: Header,
         reason = f'the start is in collision: {touching}'
         return Outcome(False, f'{where}: refused: {reason}', 'refused', reason, start=start.q,
                        start_collides=touching)
-    result = plan(_pointed(request, rotation, goal_orientation(job, s)), stop=stop)
-    if job.joint_goal and result.joint_goal is not None:
-        job.goal = tuple(result.goal.tolist())           # the tool point there, for the log
+    result = plan(request, stop=stop)
+    if goal.joint_goal is not None and result.joint_goal is not None:
+        job.goal = goal.replace(position=result.goal)    # the tool point there, for the log
     took = f'planned in {1e3 * result.plan_time_s:.3f} ms'
     clearance = (result.clearance_m, result.clearance_pair) if result.clearance_pair else None
     timed = result.plan_time_s if result.joint_goal is not None else None

@@ -14,9 +14,12 @@ from __future__ import annotations
 import collections
 from dataclasses import dataclass, field
 import enum
+import math
 import threading
 import time
 from typing import Any, Mapping
+
+from trajplan_ros.search.goal import Goal
 
 
 __all__ = ['Admission', 'Job', 'Mailbox']
@@ -35,21 +38,14 @@ class Job:
     """One goal for the worker; a service call carries the future its answer goes into."""
 
     label: str
-    goal: tuple[float, float, float]
-    tolerance: float | None = None
+    goal: Goal                               # in its frame, until the worker poses it
     future: Any = None
     stamp: tuple[int, int] | None = None     # a call's goal.header.stamp (sec, nanosec)
-    frame: str = ''                          # the goal's frame_id ('': the base frame)
-    orientation: tuple[float, float, float, float] | None = None   # a pose goal's (x, y, z, w)
     plan_only: bool = False                  # answered, never sent to the controller
-    #: how the orientation is used, instead of the goal_orientation parameter (None: as it says)
-    goal_orientation: str | None = None
-    #: changes to the settings' PlanRequest for this job alone (a MoveIt request's own
-    #: tolerances, time budget and scaling)
+    #: changes to the settings' PlanRequest for this job alone (a MoveIt request's time
+    #: budget and scaling)
     request_changes: Mapping[str, Any] = field(default_factory=dict)
     start_state: Mapping[str, float] = field(default_factory=dict)   # joint angles it gives
-    #: a joint goal instead of ``goal``: angles by joint name (the others keep their start)
-    joint_goal: Mapping[str, float] = field(default_factory=dict)
     answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)
     start_must_be_free: bool = False         # refused if the start collides (MoveIt's rule)
     ended: tuple[str, str] = ('', '')        # its first outcome on plan_results: status, reason
@@ -63,6 +59,12 @@ class Job:
     @property
     def is_call(self) -> bool:
         return self.future is not None
+
+    @property
+    def point(self) -> tuple[float, ...]:
+        """Return the goal's point, for logs and statuses (NaN for a joint goal not planned)."""
+        position = self.goal.position
+        return tuple(position.tolist()) if position.size == 3 else (math.nan,) * 3
 
 
 class Mailbox:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import itertools
-import math
 from typing import Any, Awaitable, Callable
 
 from geometry_msgs.msg import PoseStamped
@@ -30,6 +29,7 @@ from rclpy.qos import QoSProfile
 from rclpy.task import Future
 from std_msgs.msg import Header, String
 from trajplan_ros.collision.scene import Obstacle
+from trajplan_ros.planning import Goal
 from trajplan_ros.ros import moveit_interfaces as moveit
 from trajplan_ros.ros.collision_objects import MoveItObjects
 from trajplan_ros.ros.execution import action_type, ActionExecution, resolve_action
@@ -139,7 +139,7 @@ class MoveGroupServer:
 
     async def _refuse(self, label: str, refusal: moveit.Refusal) -> None:
         """Count and report a refused request as the node does its calls."""
-        await self._hooks.queue_call(Job(label, (math.nan,) * 3, future=Future()), str(refusal))
+        await self._hooks.queue_call(Job(label, Goal(), future=Future()), str(refusal))
 
     def _say_ignored(self, field: str) -> None:
         if field not in self._said:
@@ -237,7 +237,7 @@ class MoveGroupServer:
     async def _execute(self, goal: Any, trajectory: Any, feedback: type) -> tuple[str, str]:
         """Execute a joint trajectory for an action's goal; return the code's name and why."""
         s = self._hooks.settings()
-        job = Job(f'execute_trajectory #{next(self._hooks.call_ids)}', (math.nan,) * 3)
+        job = Job(f'execute_trajectory #{next(self._hooks.call_ids)}', Goal())
         try:
             motion = moveit.execution_motion(job, trajectory, s,
                                              resolve_action(self._node, s.controller_action))

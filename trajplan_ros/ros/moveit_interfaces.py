@@ -29,7 +29,7 @@ from defusedxml import ElementTree
 import numpy as np
 from rclpy.task import Future
 from trajplan_ros.kinematics.rotations import rotation_matrix
-from trajplan_ros.planning import Mode, PlanStatus
+from trajplan_ros.planning import Goal, Mode, PlanStatus
 from trajplan_ros.ros.execution import Motion
 from trajplan_ros.ros.job import frame_problem, Outcome, rotation_problem
 from trajplan_ros.ros.mailbox import Job
@@ -117,11 +117,9 @@ def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
         named = label if count == 1 else f'{label} region {k + 1}/{count}'
         if goal.visibility_constraints:
             raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
-        if goal.joint_constraints:
-            job = _joint_goal_job(named, goal, s, Future(), start)
-            changes: dict[str, Any] = {'mode': Mode.POSE}           # every joint moves
-        else:
-            job, changes = _tip_goal_job(named, goal, s, Future(), start)
+        job = (_joint_goal_job if goal.joint_constraints else _tip_goal_job)(
+            named, goal, s, Future(), start)
+        changes: dict[str, Any] = {}
         if scale:                                 # MoveIt's rule: any other factor means 1
             changes['motion'] = dataclasses.replace(s.request.motion, **scale)
         changes['max_planning_time'] = budget
@@ -178,11 +176,12 @@ def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
     # the pose is the link's origin's; the planner places its tool point (tool_offset)
     point = np.array([p.x, p.y, p.z]) + rotation_matrix(np.asarray(q) / np.linalg.norm(q)) @ (
         s.arm.tool_point)
-    job = Job(label, tuple(point.tolist()), future=Future(), frame=frame, orientation=q,
-              plan_only=True, start_state=start, answer_path=False, goal_orientation='pose')
+    goal = s.request.goal.replace(position=point, frame=frame, mode=Mode.POSE,
+                                  orientation=np.asarray(q) / np.linalg.norm(q))
+    job = Job(label, goal, future=Future(), plan_only=True, start_state=start,
+              answer_path=False)
     timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
-    job.request_changes = {'mode': Mode.POSE,
-                           'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
+    job.request_changes = {'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
     if not ik.avoid_collisions:
         job.request_changes['world'] = None
     return job
@@ -207,8 +206,8 @@ def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np
 
 
 def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,
-                  start: dict[str, float]) -> tuple[Job, dict[str, Any]]:
-    """Return the job of a position (and orientation) goal on the tip, and its changes."""
+                  start: dict[str, float]) -> Job:
+    """Return the job of a position (and orientation) goal on the tip."""
     if len(goal.position_constraints) != 1 or len(goal.orientation_constraints) > 1:
         raise Refusal('INVALID_GOAL_CONSTRAINTS',
                       f'{len(goal.position_constraints)} position and '
@@ -218,14 +217,12 @@ def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,
     _check_link(position.link_name, settings)
     frame = _frame(position.header.frame_id, settings)
     centre, radius = _region(position)
-    job = Job(label, tuple(centre.tolist()), tolerance=radius, future=future, frame=frame,
-              plan_only=True, start_state=start, answer_path=False)
-    job.goal_orientation = 'ignore'
-    changes: dict[str, Any] = {'mode': Mode.FREE}
+    region = Goal(centre, tolerance=radius, frame=frame)
     if goal.orientation_constraints:
-        _orient(job, changes, goal.orientation_constraints[0], frame, settings)
+        region = _oriented(region, goal.orientation_constraints[0], settings)
     _check_offset(position, settings)
-    return job, changes
+    return Job(label, region, future=future, plan_only=True, start_state=start,
+               answer_path=False)
 
 
 def _joint_goal_job(label: str, goal: Any, settings: Settings, future: Any,
@@ -257,10 +254,8 @@ def _joint_goal_job(label: str, goal: Any, settings: Settings, future: Any,
         if low - c.tolerance_above <= q <= high + c.tolerance_below:
             q = min(max(q, low), high)
         angles[c.joint_name] = float(q)
-    job = Job(label, (math.nan,) * 3, future=future, plan_only=True, start_state=start,
-              answer_path=False)
-    job.joint_goal = angles
-    return job
+    return Job(label, Goal(joint_goal=angles), future=future, plan_only=True,
+               start_state=start, answer_path=False)
 
 
 def _has_constraints(constraints: Any) -> bool:
@@ -348,12 +343,11 @@ def _region(position: Any) -> tuple[np.ndarray, float]:
     return centre, float(radius)
 
 
-def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
-            settings: Settings) -> None:
-    """Make ``job`` a pose or approach goal as an OrientationConstraint says."""
+def _oriented(region: Goal, constraint: Any, settings: Settings) -> Goal:
+    """Return the position region as a pose or approach goal as an OrientationConstraint says."""
     _check_link(constraint.link_name, settings)
     base = settings.base_frame
-    if (constraint.header.frame_id or base) != (frame or base):
+    if (constraint.header.frame_id or base) != (region.frame or base):
         raise Refusal('INVALID_GOAL_CONSTRAINTS', 'the position and orientation constraints '
                                                   'are in different frames')
     o = constraint.orientation
@@ -368,17 +362,14 @@ def _orient(job: Job, changes: dict[str, Any], constraint: Any, frame: str,
                                                   'be positive')
     free = [t >= _FREE for t in tol]
     if all(free):
-        return
-    job.orientation = q
+        return region
+    unit = np.asarray(q) / np.linalg.norm(q)
     if free[2] and not any(free[:2]):
-        job.goal_orientation = 'approach'
-        changes.update(mode=Mode.APPROACH, axis_tolerance=min(tol[:2]))
-    elif not any(free):
-        job.goal_orientation = 'pose'
-        changes.update(mode=Mode.POSE, orientation_tolerance=min(tol))
-    else:
-        raise Refusal('INVALID_GOAL_CONSTRAINTS', 'a rotation free about the x or y axis is not '
-                                                  'offered; free about z, it is an approach goal')
+        return region.replace(mode=Mode.APPROACH, orientation=unit, axis_tolerance=min(tol[:2]))
+    if not any(free):
+        return region.replace(mode=Mode.POSE, orientation=unit, orientation_tolerance=min(tol))
+    raise Refusal('INVALID_GOAL_CONSTRAINTS', 'a rotation free about the x or y axis is not '
+                                              'offered; free about z, it is an approach goal')
 
 
 def _check_offset(position: Any, settings: Settings) -> None:
@@ -421,13 +412,11 @@ def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
     if status is PlanStatus.NOT_REACHED:
         if result.clearance_pair:                   # reached, but every motion collides
             return 'PLANNING_FAILED', outcome.reason
-        if job.goal_orientation in ('approach', 'pose'):
-            angle = (result.orientation_error_rad if job.goal_orientation == 'pose'
+        goal = job.goal
+        if goal.joint_goal is None and goal.mode in (Mode.APPROACH, Mode.POSE):
+            angle = (result.orientation_error_rad if goal.mode is Mode.POSE
                      else result.axis_error_rad)
-            limit = job.request_changes.get('orientation_tolerance'
-                                            if job.goal_orientation == 'pose'
-                                            else 'axis_tolerance', 0.0)
-            if not angle <= limit:
+            if not angle <= goal.angle_limit:
                 return 'GOAL_CONSTRAINTS_VIOLATED', outcome.reason
         return 'NO_IK_SOLUTION', outcome.reason
     return 'PLANNING_FAILED', outcome.reason

@@ -436,17 +436,18 @@ class PlannerNode(Node):
     # --- inputs (executor thread) -----------------------------------------------------------
 
     def _on_goal(self, msg: Point) -> None:
-        self._take_goal(Job(f'goal #{next(self._goal_ids)}', (msg.x, msg.y, msg.z)))
+        self._take_goal(Job(f'goal #{next(self._goal_ids)}',
+                            jobs.message_goal(self._settings, (msg.x, msg.y, msg.z))))
 
     def _take_goal(self, job: Job) -> None:
         """Queue a topic goal (the newest waits), or refuse it when its frame is unknown."""
         self._counters.add('goals_received')
-        problem = goal_problem(job.frame, job.orientation, self._settings)
+        problem = goal_problem(job.goal.frame, job.goal.orientation, self._settings)
         if problem:
             self._counters.add('goals_failed')
             self._refused(job, problem)
             return
-        self._log.debug(f'queued {job.label} {describe_goal(job.goal)} m')
+        self._log.debug(f'queued {job.label} {describe_goal(job.point)} m')
         superseded = self._mailbox.put_goal(job)
         if superseded is job:
             self._give_up(job)
@@ -454,19 +455,19 @@ class PlannerNode(Node):
             self._counters.add('goals_superseded')
             reason = f'{job.label} arrived while planning'
             self._log.info(
-                f'superseded {superseded.label} {describe_goal(superseded.goal)} m: '
+                f'superseded {superseded.label} {describe_goal(superseded.point)} m: '
                 f'{reason}')
             self._publish_outcome(superseded, 'superseded', reason)
 
     def _on_clicked_point(self, msg: PointStamped) -> None:
         p = msg.point
-        self._take_goal(Job(f'clicked_point #{next(self._goal_ids)}', (p.x, p.y, p.z),
-                            frame=msg.header.frame_id))
+        self._take_goal(Job(f'clicked_point #{next(self._goal_ids)}', jobs.message_goal(
+            self._settings, (p.x, p.y, p.z), msg.header.frame_id)))
 
     def _on_goal_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
-        self._take_goal(Job(f'goal_pose #{next(self._goal_ids)}', (p.x, p.y, p.z),
-                            frame=msg.header.frame_id, orientation=_quaternion(msg.pose)))
+        self._take_goal(Job(f'goal_pose #{next(self._goal_ids)}', jobs.message_goal(
+            self._settings, (p.x, p.y, p.z), msg.header.frame_id, _quaternion(msg.pose))))
 
     def _on_joint_states(self, msg: JointState) -> None:
         self._states.update(msg.name, msg.position, self._settings.arm.joint_names)
@@ -485,10 +486,10 @@ class PlannerNode(Node):
         s = self._settings
         p = request.goal.pose.position
         stamp = request.goal.header.stamp
+        goal = jobs.message_goal(s, (p.x, p.y, p.z), request.goal.header.frame_id,
+                                 _quaternion(request.goal.pose), request.tolerance)
         job = Job(f"{'compute_plan' if plan_only else 'service'} call #{next(self._call_ids)}",
-                  (p.x, p.y, p.z), tolerance=request.tolerance or None, future=Future(),
-                  stamp=(stamp.sec, stamp.nanosec), frame=request.goal.header.frame_id,
-                  orientation=_quaternion(request.goal.pose), plan_only=plan_only)
+                  goal, future=Future(), stamp=(stamp.sec, stamp.nanosec), plan_only=plan_only)
         response.plan = Path(header=self._header(s.base_frame))
         outcome = await self._queue_call(job, request_problem(request, s))
         if outcome is not None and outcome.path is not None:
@@ -519,7 +520,7 @@ class PlannerNode(Node):
         return outcome
 
     def _refused(self, job: Job, reason: str) -> None:
-        self._log.warning(f'{job.label} {describe_goal(job.goal)} m: refused: {reason}')
+        self._log.warning(f'{job.label} {describe_goal(job.point)} m: refused: {reason}')
         self._publish_outcome(job, 'refused', reason)
 
     def _publish_outcome(self, job: Job, status: str, reason: str,
@@ -539,7 +540,7 @@ class PlannerNode(Node):
         """Build a status of ``job`` for ``plan_results`` (``outcomes.outcome_status``)."""
         return outcomes.outcome_status(f'{self.get_fully_qualified_name()}: {job.label}',
                                        'service call' if job.is_call else 'goal', job.stamp,
-                                       job.goal, status, message, **values)
+                                       job.point, status, message, **values)
 
     # --- planning (worker thread) and answers (executor thread) -----------------------------
 
@@ -557,7 +558,7 @@ class PlannerNode(Node):
                 self._handle(job)
             except Exception as exc:  # noqa: BLE001 - a bug must not end the planning thread
                 reason = f'planning failed: {exc!r}'
-                self.get_logger().error(f'{job.label} {describe_goal(job.goal)} m: '
+                self.get_logger().error(f'{job.label} {describe_goal(job.point)} m: '
                                         f'{reason}')
                 self._give_up(job, status='failed', reason=reason)
             self._current = None
@@ -585,10 +586,10 @@ class PlannerNode(Node):
         """
         r = settings.request
         pose = settings.goal_orientation == 'pose'
-        kind = (r.mode, pose, r.world is not None, r.motion.profile, r.algorithm)
+        kind = (r.goal.mode, pose, r.world is not None, r.motion.profile, r.algorithm)
         if kind in self._prepared:
             return
-        requests = [r, r.replace(mode=Mode.POSE)] if pose else [r]
+        requests = [r, r.replace(goal=r.goal.replace(mode=Mode.POSE))] if pose else [r]
         kernels = prepare(*requests, announce=self.get_logger().info)
         log = self.get_logger().info if kernels.compiled else self.get_logger().debug
         log(kernels.describe())
@@ -616,7 +617,7 @@ class PlannerNode(Node):
         start = self._states.start(s.arm.joint_names, s.start)
         if job.start_state:
             start = start.given(job.start_state, 'the request')
-        self._log.debug(f'planning {job.label} {describe_goal(job.goal)} m')
+        self._log.debug(f'planning {job.label} {describe_goal(job.point)} m')
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
@@ -671,7 +672,7 @@ class PlannerNode(Node):
         msg = self._status(job, status, message, execution=execution or outcomes.Execution())
         self._results.publish(msg)
         log = self._log.warning if msg.level == DiagnosticStatus.ERROR else self._log.info
-        log(f'{job.label} {describe_goal(job.goal)} m: execution: {status}: {message}')
+        log(f'{job.label} {describe_goal(job.point)} m: execution: {status}: {message}')
 
     def _mark_counted(self, job: Job) -> bool:
         """Mark ``job`` as logged and counted; False if it already was."""
@@ -696,7 +697,7 @@ class PlannerNode(Node):
                 given = ('answered with a plan; not published' if job.planned_answer
                          else 'unplanned')
                 reason = f'{given}: shutting down'
-                self.get_logger().info(f'{job.label} {describe_goal(job.goal)} m: {reason}')
+                self.get_logger().info(f'{job.label} {describe_goal(job.point)} m: {reason}')
         self._publish_outcome(job, status, reason or 'shutting down')   # unless told already
 
     def _answer(self, job: Job, outcome: jobs.Outcome | None) -> None:

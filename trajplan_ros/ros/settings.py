@@ -36,7 +36,8 @@ from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
 from trajplan_ros.planning import (ALGORITHMS, DEFAULT_AXIS_TOLERANCE,
                                    DEFAULT_ORIENTATION_TOLERANCE, DEFAULT_TOLERANCE, Mode,
                                    PlanRequest)
-from trajplan_ros.search.objective import DEFAULT_OMEGA, TOP_DOWN
+from trajplan_ros.search.goal import Goal, TOP_DOWN
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 
 
 __all__ = ['PARAMETERS', 'ParameterSpec', 'Settings', 'default_values']
@@ -331,7 +332,7 @@ class Settings:
 
 
 def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
-    """Return the plan settings of the parameters, checked: all but the world, goal and start."""
+    """Return the plan settings of the parameters, checked: all but the world, start and point."""
     base = (_limits_file(values['joint_limits_file']) if values['joint_limits_file']
             else MotionProfile())
     motion = replace(base, profile=values['profile'], timing=values['timing'],
@@ -341,11 +342,12 @@ def _request(values: Mapping[str, Any], arm: ArmModel) -> PlanRequest:
                      acceleration_scaling=(values['acceleration_scaling']
                                            or base.acceleration_scaling))
     mode = Mode.APPROACH.value if values['goal_orientation'] == 'approach' else values['mode']
+    goal = Goal(mode=mode, approach=values['approach_direction'], tolerance=values['tolerance'],
+                axis_tolerance=values['axis_tolerance'] or None,
+                orientation_tolerance=values['orientation_tolerance'])
     request = PlanRequest(
-        (), arm=arm, mode=mode, approach=values['approach_direction'], motion=motion,
-        angular_velocity=values['angular_velocity'], tolerance=values['tolerance'],
-        axis_tolerance=values['axis_tolerance'] or None,
-        orientation_tolerance=values['orientation_tolerance'], algorithm=values['algorithm'],
+        goal, arm=arm, motion=motion, angular_velocity=values['angular_velocity'],
+        algorithm=values['algorithm'],
         population=values['population'], max_iterations=values['max_iterations'],
         seed=None if values['seed'] < 0 else values['seed'],
         max_planning_time=values['max_planning_time'],

@@ -92,7 +92,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trajplan_ros.kinematics.jit import kernel
-from trajplan_ros.search.objective import Evaluation, Mode, Objective
+from trajplan_ros.search.goal import Mode
+from trajplan_ros.search.objective import Evaluation, Objective
 from trajplan_ros.search.optimize import (asked, History, initial_population, Interrupt,
                                           OptimizeResult)
 from trajplan_ros.search.polish import agreeing, EarlyStop, polish as polish_candidates, settle

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from enum import Enum
 from typing import NamedTuple, Sequence
 
 import numpy as np
@@ -49,10 +48,10 @@ from trajplan_ros.kinematics.rotations import rotation_matrix, unit_quaternion
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import motion_times, TimeLaw
 from trajplan_ros.search.fuzzy import RewardPunishment, Shaping, shaping_eq9
+from trajplan_ros.search.goal import Goal, InvalidRequest, Mode, unit_direction
 
-__all__ = ['Mode', 'Objective', 'Evaluation', 'InvalidRequest', 'Problem', 'TOP_DOWN',
-           'direction_basis', 'errors_eq11', 'planned_arm', 'second_axis', 'tool_angle',
-           'tool_angles', 'unit_direction']
+__all__ = ['Objective', 'Evaluation', 'Problem', 'direction_basis', 'errors_eq11',
+           'planned_arm', 'second_axis', 'tool_angle', 'tool_angles']
 
 #: Table 4: angular velocity of every servo, rad/s.
 DEFAULT_OMEGA = 0.2
@@ -61,24 +60,9 @@ DEFAULT_OMEGA = 0.2
 REACH_ROUNDING = 1e-9
 
 
-class Mode(str, Enum):
-    """Which constraints a plan must meet."""
-
-    FREE = 'free'
-    RADIAL = 'radial'
-    APPROACH = 'approach'
-    POSE = 'pose'
-
-
-#: The approach direction of a grasp from above (base frame).
-TOP_DOWN = (0.0, 0.0, -1.0)
 #: Largest sine of the angle between two joint axes that counts as parallel (``pan_and_pitch``):
 #: a URDF's axes are off by micro-radians.
 PARALLEL = 1e-3
-
-
-class InvalidRequest(ValueError):
-    """A goal or start that is refused before any optimisation (reason in the message)."""
 
 
 @dataclass(frozen=True)
@@ -88,14 +72,6 @@ class Evaluation:
     efficiency: np.ndarray      # F (eq. 9), s
     motion_time: np.ndarray     # R (eq. 10), s
     error: np.ndarray           # constraint error fed to S (eq. 11), m
-
-
-def unit_direction(direction: np.ndarray | Sequence[float]) -> np.ndarray:
-    """Return an approach direction as a unit vector; InvalidRequest if it has none."""
-    d = np.array(direction, dtype=float).ravel()
-    if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
-        raise InvalidRequest(f'approach must be 3 finite numbers, not all zero, got {d.tolist()}')
-    return d / np.linalg.norm(d)
 
 
 def second_axis(tool_axis: np.ndarray) -> np.ndarray:
@@ -230,27 +206,27 @@ class Objective:
     """
     F = R + S for reaching ``goal`` from ``start`` with ``arm`` (planned joints only vary).
 
+    ``goal``: a point goal in the base frame (``Goal``: its position, mode, and the mode's
+    approach direction or orientation; its tolerances are the planner's, not the objective's).
+    ``goal``, ``mode``, ``approach`` and ``orientation`` hold what it takes of it: the position
+    (m), the mode, the unit approach direction, a pose's unit quaternion (x, y, z, w).
     ``across`` (modes but free): how many orientation residuals the constraints hold at zero:
     the tool axis's two components across the axis target, then (a pose) the second axis's;
-    all of them (None: 2, or 3 for a pose), but for ``solution_curve``'s curves. ``approach``: the
-    approach mode's direction d (base frame; default ``TOP_DOWN``). ``orientation``: the pose
-    mode's tool orientation, a unit quaternion (x, y, z, w) in the base frame.
+    all of them (None: 2, or 3 for a pose), but for ``solution_curve``'s curves.
     ``start_margin``: how far (rad) a start joint may lie outside its limits (``start_notes``).
     ``profile``: the motion's profile and limits (default the paper's servo law); a profile
     that needs a limit no source gives raises ValueError.
     """
 
-    def __init__(self, arm: ArmModel, goal: np.ndarray, start: np.ndarray, *,
-                 mode: Mode | str = Mode.FREE, omega: float = DEFAULT_OMEGA,
-                 shaping: RewardPunishment | None = None, across: int | None = None,
-                 profile: MotionProfile | None = None,
-                 approach: np.ndarray | tuple[float, ...] = TOP_DOWN,
-                 orientation: np.ndarray | tuple[float, ...] | None = None,
+    def __init__(self, arm: ArmModel, goal: Goal, start: np.ndarray, *,
+                 omega: float = DEFAULT_OMEGA, shaping: RewardPunishment | None = None,
+                 across: int | None = None, profile: MotionProfile | None = None,
                  start_margin: float = 0.0) -> None:
         self.arm = arm
-        self.mode = Mode(mode)
-        self.approach = unit_direction(approach)
-        self.orientation = self._check_orientation(orientation, self.mode)
+        self.mode = goal.mode
+        self.approach = goal.approach_direction if self.mode is Mode.APPROACH else (
+            unit_direction(goal.approach))
+        self.orientation = self._check_orientation(goal.orientation, self.mode)
         across = self._check_across(across, self.mode)
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f'angular velocity must be finite and positive, got {omega}')
@@ -258,7 +234,7 @@ class Objective:
         self.profile = profile if profile is not None else MotionProfile()
         law = self.profile.time_law(arm, self.omega)
         self.shaping = shaping if shaping is not None else RewardPunishment()
-        self.goal = self._check_goal(arm, goal, self.mode)
+        self.goal = self._check_goal(arm, goal.position, self.mode)
         self.start_margin = float(start_margin)
         #: The full start, and one line per joint outside its limits within ``start_margin``.
         self.start, self.start_notes = self._check_start(arm, start, self.start_margin)
@@ -310,13 +286,15 @@ class Objective:
         if across == self._across:
             return self
         if across not in self._holding:
-            self._holding[across] = Objective(self.arm, self.goal, self.start, mode=self.mode,
+            self._holding[across] = Objective(self.arm, self.as_goal(), self.start,
                                               omega=self.omega, shaping=self.shaping,
                                               across=across, profile=self.profile,
-                                              approach=self.approach,
-                                              orientation=self.orientation,
                                               start_margin=self.start_margin)
         return self._holding[across]
+
+    def as_goal(self) -> Goal:
+        """Return the goal this objective holds the tool to (as ``aimed`` left it)."""
+        return Goal(self.goal, self.mode, self.approach, self.orientation)
 
     def aimed(self, goal: np.ndarray, target: np.ndarray) -> Objective:
         """

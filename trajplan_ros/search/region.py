@@ -49,7 +49,8 @@ import numpy as np
 
 from trajplan_ros.kinematics.rotations import (quaternion_of_turn, quaternions, rotation_matrix,
                                                turn_of_quaternion)
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.goal import Mode
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
 
 __all__ = ['Region', 'multipliers', 'target_gradient', 'within_tolerances']

@@ -13,8 +13,8 @@ from trajplan_ros.collision.shapes import MeshSource
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
-from trajplan_ros.planning.request import (DEFAULT_AXIS_TOLERANCE,
-                                           DEFAULT_ORIENTATION_TOLERANCE, DEFAULT_TOLERANCE)
+from trajplan_ros.search.goal import (DEFAULT_AXIS_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE,
+                                      DEFAULT_TOLERANCE)
 from trajplan_ros.search.objective import DEFAULT_OMEGA
 
 __all__ = ['TOLERANCES', 'UsageError', 'add_arm_arguments', 'add_collision_arguments',

@@ -34,7 +34,7 @@ import numpy as np
 from rcl_interfaces.srv import GetParameters
 from trajplan_ros.kinematics import ArmModel, paper_arm
 from trajplan_ros.ros.moveit_interfaces import moveit_types
-from trajplan_ros.search.objective import Mode
+from trajplan_ros.search.goal import Mode
 from trajplan_ros.search.region import Region
 from trajplan_ros.tools.bench.chain_bench import ChainCase, draw_chain_cases, region_cases
 from trajplan_ros.tools.bench.runner import SUCCESS_GAP

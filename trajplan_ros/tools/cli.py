@@ -16,7 +16,8 @@ from trajplan_ros.kinematics.urdf_export import urdf_xml
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import (ALGORITHMS, describe_residual, plan, PlanRequest,
                                            PlanResult, PlanStatus, prepare)
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, TOP_DOWN
+from trajplan_ros.search.goal import Goal, Mode, TOP_DOWN
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 from trajplan_ros.tools import bench, demo, figures, node_commands
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_collision_arguments,
                                           add_motion_arguments, add_tolerance_arguments,
@@ -243,24 +244,29 @@ def _unparsed(line: int, reason: str, args: argparse.Namespace, arm: ArmModel
     """Return the JSON line of a CSV line without a goal: a rejected plan, goal null."""
     request = args.request
     rejected = PlanResult(PlanStatus.REJECTED, f'line {line}: {reason}', goal=np.full(3, np.nan),
-                          start=None, algorithm=request.algorithm, mode=request.mode.value,
+                          start=None, algorithm=request.algorithm, mode=request.goal.mode.value,
                           angular_velocity=request.angular_velocity, motion=request.motion)
     return {**_record(rejected, line, arm, args), 'goal': None}
 
 
-def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
-    """Return the settings of ``trajplan plan``'s flags as a request (its goal still empty)."""
+def _goal(args: argparse.Namespace) -> Goal:
+    """Return the goal of ``trajplan plan``'s flags: its kind and tolerances, no point yet."""
     implied = (Mode.APPROACH.value if args.approach else
                Mode.POSE.value if args.orientation else Mode.FREE.value)
     mode = args.mode or implied
     for flag, needs in (('approach', Mode.APPROACH.value), ('orientation', Mode.POSE.value)):
         if getattr(args, flag) and mode != needs:
             raise UsageError(f'--{flag} needs --mode {needs}, not {mode}')
+    return Goal(mode=mode, approach=args.approach or TOP_DOWN, orientation=args.orientation,
+                **tolerances_from_arguments(args))
+
+
+def _request(args: argparse.Namespace, arm: ArmModel) -> PlanRequest:
+    """Return the settings of ``trajplan plan``'s flags as a request (its goal's point empty)."""
     request = PlanRequest(
-        (), arm=arm, mode=mode, approach=args.approach or TOP_DOWN,
-        orientation=args.orientation, motion=motion_from_arguments(args),
+        _goal(args), arm=arm, motion=motion_from_arguments(args),
         angular_velocity=args.angular_velocity, world=world_from_arguments(args, arm),
-        **tolerances_from_arguments(args), algorithm=args.algorithm, seed=args.seed,
+        algorithm=args.algorithm, seed=args.seed,
         max_planning_time=args.max_planning_time, start_limit_margin=args.start_limit_margin,
         detours=args.detours)
     request.validate()
@@ -286,7 +292,8 @@ def _run_plan(args: argparse.Namespace) -> int:
         if args.xyz or args.goals is not None:
             raise UsageError('give X Y Z, --goals FILE or --joint-goal Q..., one of them')
         start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
-        result = plan(request.replace(joint_goal=args.joint_goal, start=start))
+        result = plan(request.replace(goal=request.goal.replace(joint_goal=args.joint_goal),
+                                      start=start))
         print(_line(result, None, arm, args))
         return 0 if result.success else 1
     if args.goals is None:
@@ -294,7 +301,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             raise UsageError('give a goal as X Y Z (3 numbers) or --goals FILE, '
                              f'got {len(args.xyz)} number(s)')
         start = None if args.start is None else arm.full_start(args.start)   # ValueError: exit 2
-        result = plan(request.replace(goal=args.xyz, start=start))
+        result = plan(request.replace(goal=request.goal.replace(position=args.xyz), start=start))
         print(_line(result, None, arm, args))
         return 0 if result.success else 1
     if args.xyz:
@@ -306,15 +313,15 @@ def _run_plan(args: argparse.Namespace) -> int:
     failures = 0
     for number, cells in lines:
         try:
-            goal, pointing, start = _parse_line(cells, layout, arm)
-            line_request = request.replace(goal=goal, start=args.start if start is None
-                                           else start)
+            position, pointing, start = _parse_line(cells, layout, arm)
+            goal = request.goal.replace(position=position)
             if layout.pointing:
                 mode = POINTING[layout.pointing]
-                line_request = line_request.replace(
-                    mode=mode, **{'approach' if mode is Mode.APPROACH else 'orientation':
-                                  pointing})
-                line_request.validate()
+                goal = goal.replace(mode=mode, **{
+                    'approach' if mode is Mode.APPROACH else 'orientation': pointing})
+            line_request = request.replace(goal=goal, start=args.start if start is None
+                                           else start)
+            line_request.validate()
         except (UsageError, ValueError) as exc:
             failures += 1
             record = _unparsed(number, str(exc), args, arm)

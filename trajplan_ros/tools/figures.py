@@ -35,7 +35,8 @@ from trajplan_ros.motion.motion_profile import MotionProfile, Profile, Timing
 from trajplan_ros.motion.trajectory import motion_states
 from trajplan_ros.planning import planner
 from trajplan_ros.planning.planner import PlanResult
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import paper_case
 from trajplan_ros.tools.bench.methods import METHODS
 from trajplan_ros.tools.bench.runner import run
@@ -216,7 +217,7 @@ def make_figures(outdir: Path, *, seed: int = DEFAULT_SEED, runs: int = DEFAULT_
 
     arm, mode = paper_arm(), Mode.FREE
     case = paper_case(arm, mode, seed)
-    obj = Objective(arm, case.goal, case.start, mode=mode)
+    obj = Objective(arm, Goal(case.goal, mode=mode), case.start)
     eps = obj.shaping.eps
     f_star = float(obj(case.exact.joint_goal).efficiency[0])
     five = ('iepso', 'iepso-paper', 'pso', 'spso', 'ga', 'de')

@@ -27,7 +27,8 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
-from trajplan_ros.search.objective import Mode, planned_arm
+from trajplan_ros.search.goal import Mode
+from trajplan_ros.search.objective import planned_arm
 from trajplan_ros.tools.bench.methods import Answer, Method
 
 __all__ = ['baseline_method']

@@ -30,7 +30,7 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
-from trajplan_ros.search.objective import Mode
+from trajplan_ros.search.goal import Mode
 from trajplan_ros.tools.bench.reference import exact_minimum, ExactOptimum
 
 __all__ = ['Case', 'DRAWS', 'PAPER_TABLE5', 'PAPER_TARGET', 'PUBLISHED', 'PublishedArm',

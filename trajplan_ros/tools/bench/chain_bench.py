@@ -37,8 +37,8 @@ from trajplan_ros.kinematics.rotations import quaternions, rotation_matrix
 from trajplan_ros.kinematics.urdf_import import joints_between, read_urdf
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.motion.time_law import joint_reach, SERVO
-from trajplan_ros.planning.request import DEFAULT_AXIS_TOLERANCE
-from trajplan_ros.search.objective import InvalidRequest, Mode, Objective, TOP_DOWN
+from trajplan_ros.search.goal import DEFAULT_AXIS_TOLERANCE, Goal, InvalidRequest, Mode, TOP_DOWN
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.region import Region
 from trajplan_ros.tools.bench.methods import Answer, Method
 from trajplan_ros.tools.bench.report import format_table
@@ -324,8 +324,8 @@ def draw_chain_cases(arm: ArmModel, n: int, *, mode: Mode, random_starts: bool, 
         start = q[1] if random_starts else np.clip(np.zeros(arm.n_joints), arm.lower, arm.upper)
         plan_seed = int(rng.integers(2 ** 31))
         try:
-            obj = Objective(arm, goal, start, mode=mode, profile=profile,
-                            orientation=orientation)
+            obj = Objective(arm, Goal(goal, mode=mode, orientation=orientation), start,
+                            profile=profile)
         except InvalidRequest:
             dropped += 1
             continue
@@ -354,8 +354,8 @@ def region_cases(cases: Sequence[ChainCase], arm: ArmModel, mode: Mode, region: 
     """
     out = []
     for case in cases:
-        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
-                        orientation=case.orientation)
+        obj = Objective(arm, Goal(case.goal, mode=mode, orientation=case.orientation),
+                        case.start, profile=profile)
         time, best = region_reference(obj, region, np.random.default_rng(case.seed), starts,
                                       case.reference_q[: obj.arm.planned])
         out.append(replace(case, reference_time=time, reference_q=obj.full(best)[0]))
@@ -470,8 +470,8 @@ def _full(arm: ArmModel, method: Method, mode: Mode, case: ChainCase, profile: M
         return answer.joints, answer.seconds
     if answer.plan is not None:
         return answer.plan.joint_goal, answer.seconds
-    obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
-                    orientation=case.orientation)
+    obj = Objective(arm, Goal(case.goal, mode=mode, orientation=case.orientation),
+                    case.start, profile=profile)
     return obj.full(answer.x)[0], answer.seconds
 
 
@@ -493,8 +493,8 @@ def run_chain(methods: Sequence[Method], cases: Sequence[ChainCase], arm: ArmMod
                                 *(np.full(n, np.nan) for _ in range(4)), *limits)
            for m in methods}
     for k, case in enumerate(cases):
-        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile,
-                        orientation=case.orientation)
+        obj = Objective(arm, Goal(case.goal, mode=mode, orientation=case.orientation),
+                        case.start, profile=profile)
         for method in methods:
             clock = time.perf_counter()
             q, seconds = _full(arm, method, mode, case, obj.profile, tolerances)

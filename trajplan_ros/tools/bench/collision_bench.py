@@ -44,6 +44,7 @@ from trajplan_ros.motion.motion_profile import MotionProfile, Timing
 from trajplan_ros.motion.trajectory import Trajectory
 from trajplan_ros.planning.planner import plan, PlanRequest, PlanStatus, prepare
 from trajplan_ros.search.free_goal import project_onto_goal
+from trajplan_ros.search.goal import Goal
 from trajplan_ros.search.objective import Objective
 from trajplan_ros.search.polish import polish
 from trajplan_ros.tools.arguments import positive_count
@@ -139,7 +140,7 @@ def draw_goal(bench: BenchArm, world: CollisionWorld, rng: np.random.Generator) 
 def goal_solutions(bench: BenchArm, goal: np.ndarray, omega: float, count: int
                    ) -> tuple[Objective, np.ndarray]:
     """Return the goal's objective and ``count`` joint solutions' reached ones, fastest first."""
-    obj = Objective(bench.arm, goal, bench.start, omega=omega)
+    obj = Objective(bench.arm, Goal(goal), bench.start, omega=omega)
     rng = np.random.default_rng(12345)
     projected = project_onto_goal(obj, rng.uniform(obj.lower, obj.upper, (count, obj.arm.planned)))
     x = np.vstack((projected, polish(obj, projected)))

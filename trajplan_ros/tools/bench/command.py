@@ -31,7 +31,8 @@ from typing import Sequence
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import prepare
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode
+from trajplan_ros.search.goal import Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA
 from trajplan_ros.tools.arguments import (add_arm_arguments, add_motion_arguments,
                                           add_tolerance_arguments, arm_from_arguments,
                                           motion_from_arguments, positive_count, TOLERANCES,

@@ -79,7 +79,8 @@ def _blocked(row: Row, bench: BenchArm, world: CollisionWorld, check: Independen
         row.detour_motion, row.detour_vias = around.motion_time_s, len(around.via_points)
         row.detour_broken = check.violations(
             every_millisecond(around.trajectory(sample_period=1.0)), START_TOLERANCE)
-    obj, solutions = goal_solutions(bench, request.goal, request.angular_velocity, args.brute)
+    obj, solutions = goal_solutions(bench, request.goal.position, request.angular_velocity,
+                                    args.brute)
     law, timing = around.law, around.motion.timing
     limits = StartLimits.at(world, bench.start)
 

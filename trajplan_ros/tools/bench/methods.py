@@ -29,7 +29,8 @@ from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import ALGORITHMS, plan, PlanResult
 from trajplan_ros.search.fuzzy import RewardPunishment
-from trajplan_ros.search.objective import Mode, Objective, planned_arm
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import Objective, planned_arm
 
 __all__ = ['Answer', 'Method', 'METHODS', 'ITERATIONS', 'PARTICLES', 'PYSWARMS_OPTIONS',
            'load', 'pyswarms_logging']
@@ -140,7 +141,7 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
               tolerances: Mapping[str, float] | None = None) -> Answer:
     from scipy.optimize import differential_evolution
 
-    obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
+    obj = Objective(arm, Goal(goal, mode=mode, orientation=orientation), start, profile=profile)
     # vectorized: x is (planned, S) for a generation and (planned, 1) while polishing
     found = differential_evolution(lambda x: obj(x.T).efficiency, list(zip(obj.lower, obj.upper)),
                                    vectorized=True, updating='deferred', polish=True,
@@ -151,7 +152,7 @@ def _scipy_de(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, se
 def _pyswarms(arm: ArmModel, mode: Mode, goal: np.ndarray, start: np.ndarray, seed: int,
               profile: MotionProfile, orientation: np.ndarray | None = None,
               tolerances: Mapping[str, float] | None = None) -> Answer:
-    obj = Objective(arm, goal, start, mode=mode, profile=profile, orientation=orientation)
+    obj = Objective(arm, Goal(goal, mode=mode, orientation=orientation), start, profile=profile)
     state = np.random.get_state()             # pyswarms draws from numpy's global generator
     np.random.seed(seed)
     try:

@@ -15,7 +15,8 @@ import numpy as np
 
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.search.fuzzy import RewardPunishment
-from trajplan_ros.search.objective import DEFAULT_OMEGA, Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import DEFAULT_OMEGA, Objective
 from trajplan_ros.tools.bench.cases import Case, PAPER_TABLE5, PAPER_TARGET
 from trajplan_ros.tools.bench.runner import (Results, SUCCESS_AXIS_ERROR, SUCCESS_ERROR,
                                              SUCCESS_GAP)
@@ -155,7 +156,7 @@ def _run_rows(results: dict[str, Results], case: Case, arm: ArmModel,
               mode: Mode) -> list[tuple[str, ...]]:
     """Return the rows of this run on the paper's target, the exact optimum first."""
     exact = case.exact.joint_goal
-    f_exact = float(Objective(arm, case.goal, case.start, mode=mode)(exact).efficiency[0])
+    f_exact = float(Objective(arm, Goal(case.goal, mode=mode), case.start)(exact).efficiency[0])
     rows = [('exact optimum', *(f'{v:+.4f}' for v in exact), f'{f_exact:.4g}', '0',
              f'{case.exact_time:.3f}', '+0.00 %', '-')]
     rows += [(name, *(f'{v:+.4f}' for v in r.x[0]), f'{r.efficiency[0]:.4g}',

@@ -23,7 +23,8 @@ import numpy as np
 from trajplan_ros.kinematics import ArmModel
 from trajplan_ros.motion.motion_profile import MotionProfile
 from trajplan_ros.planning.planner import PlanResult
-from trajplan_ros.search.objective import Mode, Objective
+from trajplan_ros.search.goal import Goal, Mode
+from trajplan_ros.search.objective import Objective
 from trajplan_ros.tools.bench.cases import Case
 from trajplan_ros.tools.bench.methods import Answer, Method
 
@@ -102,7 +103,7 @@ def run(methods: Sequence[Method], cases: Sequence[Case], arm: ArmModel, mode: M
     """
     out = {m.name: Results.empty(len(cases), arm.planned) for m in methods}
     for k, case in enumerate(cases):
-        obj = Objective(arm, case.goal, case.start, mode=mode, profile=profile)
+        obj = Objective(arm, Goal(case.goal, mode=mode), case.start, profile=profile)
         for method in methods:
             clock = time.perf_counter()
             answer = method.solve(arm, mode, case.goal, case.start, case.seed, obj.profile)
