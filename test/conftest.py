@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import os
+import shlex
 import shutil
 import signal
 import tempfile
@@ -108,18 +109,22 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
     return Install(root / 'install' / PACKAGE)
 
 
-# --- interfaces not on PyPI: control_msgs (execution), moveit_msgs (MoveIt's clients) -----------
+# --- ROS packages not on PyPI: control_msgs (execution), moveit_msgs (MoveIt), tf2 (frames) ------
 
 #: The interface sources and their build script (neither package is on PyPI): the folder
 #: ROS_INTERFACES_SRC names, else ``shared/ros_interfaces`` beside this clone.
 ROS_INTERFACES = Path(os.environ.get('ROS_INTERFACES_SRC')
                       or REPO.parent / 'shared' / 'ros_interfaces')
-#: Each package a test needs, by the fixture that gives it, and how the node loads it.
+#: tf2's Python side (tf2_ros_py and what it needs): TF2_SRC, else ``shared/tf2``.
+TF2 = Path(os.environ.get('TF2_SRC') or REPO.parent / 'shared' / 'tf2')
+#: Each package a test needs, by the fixture that gives it: its sources, and how the node
+#: loads it.
 INTERFACES = {
-    'control_msgs_env': ('control_msgs',
+    'control_msgs_env': ('control_msgs', ROS_INTERFACES,
                          'from trajplan_ros.ros.execution import action_type; action_type()'),
-    'moveit_msgs_env': ('moveit_msgs', 'from trajplan_ros.ros.moveit_interfaces import '
-                                       'moveit_types; moveit_types()'),
+    'moveit_msgs_env': ('moveit_msgs', ROS_INTERFACES, 'from trajplan_ros.ros.moveit_interfaces '
+                                                       'import moveit_types; moveit_types()'),
+    'tf2_env': ('tf2_ros_py', TF2, 'import tf2_ros; tf2_ros.Buffer()'),
 }
 #: Where they are built, once per venv (the script installs the rosidl generators into it).
 INTERFACES_BUILD = Path(sys.prefix) / 'build' / 'ros_interfaces'
@@ -131,7 +136,7 @@ def _built(package: str) -> Path:
 
 
 def _loads(fixture: str, env: dict[str, str]) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, '-c', INTERFACES[fixture][1]], env=env,
+    return subprocess.run([sys.executable, '-c', INTERFACES[fixture][2]], env=env,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -144,19 +149,27 @@ class _InterfacesBuild:
 
     @classmethod
     def start(cls, fixtures: list[str]) -> None:
-        """Start the build where it is needed and possible (the fixtures say why otherwise)."""
+        """
+        Start the build where it is needed and possible (the fixtures say why otherwise).
+
+        One script run per source folder, in turn (they share the colcon workspace).
+        """
         script = ROS_INTERFACES / 'build_ros_interfaces.sh'
-        cls.packages = tuple(INTERFACES[f][0] for f in fixtures
-                             if not _built(INTERFACES[f][0]).is_file()
-                             and _loads(f, dict(os.environ)).returncode != 0)
+        wanted = [INTERFACES[f] for f in fixtures
+                  if not _built(INTERFACES[f][0]).is_file()
+                  and _loads(f, dict(os.environ)).returncode != 0]
+        runs = {source: [p for p, s, _ in wanted if s == source]
+                for _, source, _ in wanted if (source / 'README.md').is_file()}
+        cls.packages = tuple(p for packages in runs.values() for p in packages)
         if not cls.packages or not script.is_file():
             return
         INTERFACES_BUILD.mkdir(parents=True, exist_ok=True)
         cls.log = INTERFACES_BUILD / 'build.log'
+        steps = ' && '.join(shlex.join(['bash', str(script), sys.prefix, str(source),
+                                        str(INTERFACES_BUILD), *packages])
+                            for source, packages in runs.items())
         with open(cls.log, 'w', encoding='utf-8') as log:
-            cls.proc = subprocess.Popen(['bash', str(script), sys.prefix, str(ROS_INTERFACES),
-                                         str(INTERFACES_BUILD), *cls.packages],
-                                        stdout=log, stderr=log,
+            cls.proc = subprocess.Popen(['bash', '-c', steps], stdout=log, stderr=log,
                                         stdin=subprocess.DEVNULL, start_new_session=True)
 
     @classmethod
@@ -166,7 +179,7 @@ class _InterfacesBuild:
             return
         code = cls.proc.wait(timeout=1800)
         log = cls.log.read_text(encoding='utf-8', errors='replace')
-        assert code == 0, f'{ROS_INTERFACES}/build_ros_interfaces.sh failed:\n{log[-3000:]}'
+        assert code == 0, f'build_ros_interfaces.sh failed:\n{log[-3000:]}'
         for package in cls.packages:
             _built(package).touch()
         cls.proc = None
@@ -195,13 +208,13 @@ def _interfaces_env(fixture: str, ros_env: dict[str, str]) -> dict[str, str]:
     """
     if _loads(fixture, ros_env).returncode == 0:
         return dict(ros_env)
-    package = INTERFACES[fixture][0]
+    package, source, _ = INTERFACES[fixture]
     _InterfacesBuild.wait()
     install = INTERFACES_BUILD / 'install'
     if not _built(package).is_file():
-        pytest.skip(f'{package} does not load and {ROS_INTERFACES} has no '
-                    'build_ros_interfaces.sh to build it (set ROS_INTERFACES_SRC to the folder '
-                    'of the interface sources)')
+        pytest.skip(f'{package} does not load, and {source} (its sources) or '
+                    f'{ROS_INTERFACES}/build_ros_interfaces.sh is missing to build it (set '
+                    'ROS_INTERFACES_SRC and TF2_SRC to the folders of the sources)')
     python = f'python{sys.version_info.major}.{sys.version_info.minor}'
     paths = {'PYTHONPATH': [str(p) for p in install.glob(f'*/lib/{python}/site-packages')],
              'LD_LIBRARY_PATH': [str(p) for p in install.glob('*/lib')]}
@@ -224,6 +237,12 @@ def control_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
 def moveit_msgs_env(ros_env: dict[str, str]) -> dict[str, str]:
     """Give an environment in which moveit_msgs loads (about 5 min to build, once)."""
     return _interfaces_env('moveit_msgs_env', ros_env)
+
+
+@pytest.fixture(scope='session')
+def tf2_env(ros_env: dict[str, str]) -> dict[str, str]:
+    """Give an environment in which tf2_ros loads (about 1 min to build, once)."""
+    return _interfaces_env('tf2_env', ros_env)
 
 
 # --- the node process ---------------------------------------------------------------------------

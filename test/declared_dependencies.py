@@ -17,8 +17,8 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
 __all__ = ['DISTRIBUTION_KEYS', 'install_requires', 'is_python_key', 'KEY_DISTRIBUTIONS',
-           'NOT_ON_PYPI', 'package_dependencies', 'package_keys', 'REPO', 'ROS_DISTRIBUTIONS',
-           'RUN_TAGS', 'setup_argument']
+           'MODULE_PACKAGES', 'NOT_ON_PYPI', 'package_dependencies', 'package_keys', 'REPO',
+           'ROS_DISTRIBUTIONS', 'RUN_TAGS', 'setup_argument']
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -38,9 +38,11 @@ DISTRIBUTION_KEYS = {
 #: rosdep key is the ROS package's name.
 ROS_DISTRIBUTIONS = {'coal': 'coal'}
 KEY_DISTRIBUTIONS = {key: dist for dist, key in DISTRIBUTION_KEYS.items()}
-#: ROS packages with no wheel on PyPI: the pip route builds them from their interface files, so
-#: the venv's ament index lacks them; rosdep installs them from Jazzy's release.
-NOT_ON_PYPI = ('control_msgs', 'moveit_msgs')
+#: ROS packages with no wheel on PyPI: the pip route builds them from their sources (shared/),
+#: so the venv's ament index lacks them; rosdep installs them from Jazzy's release.
+NOT_ON_PYPI = ('control_msgs', 'moveit_msgs', 'tf2_ros_py')
+#: The ROS packages whose Python module has another name: module -> package.
+MODULE_PACKAGES = {'tf2_ros': 'tf2_ros_py'}
 
 #: package.xml's tags of what the package needs at run time (REP 140).
 RUN_TAGS = ('depend', 'exec_depend')

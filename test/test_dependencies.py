@@ -29,7 +29,8 @@ import sys
 from typing import Any, Iterator, Mapping
 
 from declared_dependencies import (DISTRIBUTION_KEYS, install_requires, is_python_key,
-                                   KEY_DISTRIBUTIONS, NOT_ON_PYPI, package_dependencies,
+                                   KEY_DISTRIBUTIONS, MODULE_PACKAGES, NOT_ON_PYPI,
+                                   package_dependencies,
                                    package_keys, REPO, ROS_DISTRIBUTIONS, RUN_TAGS,
                                    setup_argument)
 from packaging.requirements import Requirement
@@ -305,6 +306,7 @@ def test_every_module_imported_at_load_time_is_declared() -> None:
 
 
 def test_every_declared_ros_package_is_imported() -> None:
-    imported = {m for m in third_party_imports(load_time_only=False) if is_ros_package(m)}
+    imported = {MODULE_PACKAGES.get(m, m) for m in third_party_imports(load_time_only=False)
+                if is_ros_package(MODULE_PACKAGES.get(m, m))}
     declared = {key for key in package_keys(*RUN_TAGS) if not is_python_key(key)}
     assert declared <= imported, f'declared, never imported: {sorted(declared - imported)}'

@@ -6,6 +6,7 @@ import threading
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from nav_msgs.srv import GetPlan
+import numpy as np
 import pytest
 from std_msgs.msg import Header
 from trajplan_ros.planning import Goal
@@ -14,6 +15,7 @@ from trajplan_ros.ros.joint_states import JointStateMonitor
 from trajplan_ros.ros.mailbox import Admission, Job, Mailbox
 from trajplan_ros.ros.node import request_problem
 from trajplan_ros.ros.settings import default_values, Settings
+from trajplan_ros.ros.transforms import frame_pose, frame_problem
 
 #: The node's settings with every parameter at its default (the paper's arm).
 SETTINGS = Settings.from_parameters(default_values())
@@ -139,6 +141,7 @@ def test_zero_and_positive_tolerances_and_the_robots_frames_pass() -> None:
 def test_a_goal_in_a_frame_the_robot_does_not_have_is_refused() -> None:
     reason = request_problem(request(0.0, 'map'), SETTINGS)
     assert reason.startswith("frame 'map' is not a link of the robot; known frames: base_link")
+    assert reason.endswith('(other frames need tf2)')
 
 
 def test_diagnostics_warn_on_slow_calls_and_superseded_goals() -> None:
@@ -184,3 +187,40 @@ def test_other_robots_joints_are_not_checked_and_repeats_are_flushed() -> None:
                          'in the last 5 s)')
     monitor.flush_repeats()
     assert len(logged) == 2                              # nothing new to say
+
+
+class StaticTf:
+    """What tf knows, as ``transforms.Transforms`` answers: fixed poses by frame."""
+
+    def __init__(self, poses: dict[str, np.ndarray]) -> None:
+        self.poses = poses
+
+    def knows(self, target: str, frame: str) -> bool:
+        return frame in self.poses
+
+    def pose(self, target: str, frame: str, stamp: tuple[int, int], timeout: float) -> np.ndarray:
+        if frame not in self.poses:
+            raise ValueError(f"frame '{frame}' has no transform")
+        return self.poses[frame]
+
+
+def test_a_frame_is_posed_by_tf_where_tf_knows_it_else_by_the_urdf() -> None:
+    angles = dict(zip(SETTINGS.arm.joint_names, [0.3, -0.2, 0.4, 0.1, 0.0]))
+    link = SETTINGS.frames.links[-1]
+    by_fk = SETTINGS.frames.to_base(link, angles)
+    camera = np.eye(4)
+    camera[:3, 3] = (0.1, 0.2, 0.3)
+    np.testing.assert_array_equal(frame_pose('', SETTINGS, angles, None), np.eye(4))
+    np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, None), by_fk)
+    tf = StaticTf({'camera_link': camera})
+    np.testing.assert_array_equal(frame_pose('camera_link', SETTINGS, angles, tf), camera)
+    np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, tf), by_fk)   # not in tf
+    np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, StaticTf({link: camera})),
+                                  camera)                                          # tf wins
+    with pytest.raises(ValueError, match="frame 'camera_link' is not a link of the robot; .* "
+                                         r'\(other frames need tf2\)'):
+        frame_pose('camera_link', SETTINGS, angles, None)
+    with pytest.raises(ValueError, match="frame 'nowhere' has no transform"):
+        frame_pose('nowhere', SETTINGS, angles, tf)
+    assert frame_problem('nowhere', SETTINGS, with_tf=True) is None
+    assert 'need tf2' in frame_problem('nowhere', SETTINGS, with_tf=False)

@@ -8,12 +8,12 @@ at ``pose * primitive_poses[i]`` and meshes (shape_msgs/Mesh triangles) at
 ``pose * mesh_poses[i]`` (identity where a pose is missing). Operations: ADD puts the object
 in, replacing one of its id; APPEND adds its shapes to the object (ADD if there is none);
 REMOVE takes it out (an empty id: every object); MOVE gives it the message's frame and pose,
-its shapes unchanged. The frame may be any link of the robot's URDF: it is placed in the base
-frame by the robot's own kinematics at the joint angles when the message arrives, and stays
-there. A cone, and a mesh, are held by a box (a mesh's least oriented box, by trimesh): the
-plan keeps clear of the box, so of the shape inside it. Each shape is one
-obstacle, ``id`` (one shape) or ``id#k``. One bad object refuses the whole message, with the
-reason, and the objects stay as they were (``MoveItObjects.apply``).
+its shapes unchanged. The frame may be any the node poses (a link of the robot's URDF, or a
+frame tf knows: ``transforms.frame_pose``): it is placed in the base frame as that frame is
+when the message arrives, and stays there. A cone, and a mesh, are held by a box (a mesh's
+least oriented box, by trimesh): the plan keeps clear of the box, so of the shape inside it.
+Each shape is one obstacle, ``id`` (one shape) or ``id#k``. One bad object refuses the whole
+message, with the reason, and the objects stay as they were (``MoveItObjects.apply``).
 """
 from __future__ import annotations
 

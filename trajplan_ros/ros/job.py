@@ -24,8 +24,11 @@ from trajplan_ros.ros.messages import path_msg
 from trajplan_ros.ros.settings import Settings
 
 
-__all__ = ['Outcome', 'describe_arm', 'frame_problem', 'in_base', 'message_goal',
+__all__ = ['FramePose', 'Outcome', 'describe_arm', 'in_base', 'message_goal',
            'rotation_problem', 'run']
+
+#: The 4x4 pose of a frame in the base frame (ValueError: it cannot be had).
+FramePose = Callable[[str], np.ndarray]
 
 
 def describe_arm(settings: Settings) -> str:
@@ -58,21 +61,12 @@ class Outcome:
     start: np.ndarray | None = None          # the joint angles it was planned from
     result: PlanResult | None = None         # the planning core's result, if it planned
     start_collides: str = ''                 # the pairs in collision at a refused start
+    frame_failed: bool = False               # refused: the goal's frame could not be posed
 
 
 def _refusal(where: str, result: PlanResult, took: str) -> str:
     optimised = f'; {took}' if result.joint_goal is not None else ''
     return f'{where}: {result.status.value}: {result.message}{optimised}'
-
-
-def frame_problem(frame: str, settings: Settings) -> str | None:
-    """Return why a goal in ``frame`` cannot be posed (not a link of the URDF), or None."""
-    if frame and frame != settings.base_frame:
-        try:
-            settings.frames.check(frame)
-        except ValueError as exc:
-            return str(exc)
-    return None
 
 
 def _describe_joints(joint_goal: np.ndarray | Mapping[str, float]) -> str:
@@ -111,24 +105,28 @@ def message_goal(settings: Settings, position: Sequence[float], frame: str = '',
     return goal.replace(mode=Mode.POSE if how == 'pose' else Mode.APPROACH, orientation=q)
 
 
-def in_base(goal: Goal, settings: Settings, start: PlanStart) -> Goal:
-    """Return ``goal`` in the base frame (its frame posed by forward kinematics at ``start``)."""
-    s = settings
-    if goal.frame in ('', s.base_frame):
+def in_base(goal: Goal, settings: Settings, pose_of: FramePose) -> Goal:
+    """Return ``goal`` in the base frame, ``pose_of`` posing its frame there (ValueError)."""
+    if goal.frame in ('', settings.base_frame):
         return goal.replace(frame='')
-    return goal.moved(s.frames.to_base(goal.frame, dict(zip(s.arm.joint_names, start.q))))
+    return goal.moved(pose_of(goal.frame))
 
 
 def run(job: Job, settings: Settings, start: PlanStart, header: Header,
-        stop: Callable[[], bool]) -> Outcome:
+        stop: Callable[[], bool], pose_of: FramePose) -> Outcome:
     """
     Plan ``job`` from ``start``; on success build its trajectory and tool path messages.
 
-    A goal in another frame is brought into the base frame first (``job.goal`` then holds it).
+    A goal in another frame is brought into the base frame first, ``pose_of`` posing the frame
+    (``job.goal`` then holds it); a frame that cannot be posed refuses the job.
     """
     s = settings
     given = job.goal
-    job.goal = goal = in_base(given, s, start)
+    try:
+        job.goal = goal = in_base(given, s, pose_of)
+    except ValueError as exc:
+        return Outcome(False, f'{job.label} {describe_goal(given.position)} m: refused: {exc}',
+                       'refused', str(exc), start=start.q, frame_failed=True)
     request = s.request.replace(goal=goal, start=start.q, **job.request_changes)
     if goal.joint_goal is not None:
         what = f'{job.label} to joint goal {_describe_joints(goal.joint_goal)} rad'

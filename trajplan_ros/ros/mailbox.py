@@ -40,7 +40,8 @@ class Job:
     label: str
     goal: Goal                               # in its frame, until the worker poses it
     future: Any = None
-    stamp: tuple[int, int] | None = None     # a call's goal.header.stamp (sec, nanosec)
+    #: a stamped goal's header.stamp (sec, nanosec): its frame is posed then (zero: the newest)
+    stamp: tuple[int, int] | None = None
     plan_only: bool = False                  # answered, never sent to the controller
     #: changes to the settings' PlanRequest for this job alone (a MoveIt request's time
     #: budget and scaling)

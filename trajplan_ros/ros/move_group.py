@@ -23,6 +23,7 @@ import itertools
 from typing import Any, Awaitable, Callable
 
 from geometry_msgs.msg import PoseStamped
+import numpy as np
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -37,6 +38,7 @@ from trajplan_ros.ros.job import Outcome
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import pose_msg
 from trajplan_ros.ros.settings import Settings
+from trajplan_ros.ros.transforms import Transforms
 
 __all__ = ['MoveGroupServer', 'NodeHooks']
 
@@ -56,6 +58,8 @@ class NodeHooks:
     #: plan among these world objects from the next job (InvalidCollisionInput: refused);
     #: returns whether collisions are checked
     use_objects: Callable[[list[Obstacle]], bool]
+    pose_now: Callable[[str], np.ndarray]              # a frame's pose in the base frame now
+    transforms: Transforms | None                       # tf2's, for frames beyond the URDF
 
 
 class MoveGroupServer:
@@ -121,7 +125,8 @@ class MoveGroupServer:
         s = self._hooks.settings()
         label = f'{kind} #{next(self._hooks.call_ids)}'
         try:
-            jobs = moveit.goal_jobs(label, asked, s, self._hooks.semantic(), self._say_ignored)
+            jobs = moveit.goal_jobs(label, asked, s, self._hooks.semantic(), self._say_ignored,
+                                    self._hooks.transforms is not None)
         except moveit.Refusal as exc:
             await self._refuse(label, exc)
             moveit.fill_response(response, None, (exc.code, str(exc)), s, asked.group_name,
@@ -156,7 +161,8 @@ class MoveGroupServer:
         label = f'compute_ik call #{next(self._hooks.call_ids)}'
         ik = request.ik_request
         try:
-            job = moveit.ik_job(label, ik, s, self._hooks.semantic(), self._say_ignored)
+            job = moveit.ik_job(label, ik, s, self._hooks.semantic(), self._say_ignored,
+                                self._hooks.transforms is not None)
         except moveit.Refusal as exc:
             await self._refuse(label, exc)
             response.error_code = self._code(exc.code, str(exc))
@@ -302,13 +308,11 @@ class MoveGroupServer:
 
     def _apply_objects(self, messages: list[Any], replace: bool = False) -> str | None:
         """Apply world objects (``replace``: instead of all held); return why not, or None."""
-        s = self._hooks.settings()
-        angles = self._hooks.joint_angles()
         held = self._objects.objects
         try:
             if replace:
                 self._objects.objects = {}
-            objects = self._objects.apply(messages, lambda f: s.frames.to_base(f, angles))
+            objects = self._objects.apply(messages, self._hooks.pose_now)
             checked = self._hooks.use_objects(self._objects.obstacles(objects))
         except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
             self._objects.objects = held

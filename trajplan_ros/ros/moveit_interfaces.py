@@ -31,10 +31,11 @@ from rclpy.task import Future
 from trajplan_ros.kinematics.rotations import rotation_matrix
 from trajplan_ros.planning import Goal, Mode, PlanStatus
 from trajplan_ros.ros.execution import Motion
-from trajplan_ros.ros.job import frame_problem, Outcome, rotation_problem
+from trajplan_ros.ros.job import Outcome, rotation_problem
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import trajectory_msg
 from trajplan_ros.ros.settings import Settings
+from trajplan_ros.ros.transforms import frame_problem
 
 __all__ = ['EXECUTION_CODES', 'HOW_TO', 'SOURCE', 'Refusal', 'error_code', 'execution_motion',
            'fastest', 'fill_response', 'fk_poses', 'goal_jobs', 'ik_job', 'moveit_types',
@@ -85,14 +86,15 @@ def srdf_groups(srdf: str) -> tuple[str, ...]:
 
 
 def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
-              ignored: Callable[[str], None]) -> list[Job]:
+              ignored: Callable[[str], None], with_tf: bool = False) -> list[Job]:
     """
     Return the jobs of a MotionPlanRequest, one per goal region (Refusal: why, and the code).
 
     ``srdf``: the semantic description in use (its groups name the group); ``ignored`` is told
     each of MoveIt's planner-choosing fields that is set (``IGNORED``), and
-    ``allowed_planning_time`` where ``min_planning_time`` raises it. Each job is a call with a
-    future of its own; the fastest region's plan is the answer (``fastest``).
+    ``allowed_planning_time`` where ``min_planning_time`` raises it. ``with_tf``: a frame
+    outside the URDF may come through tf. Each job is a call with a future of its own; the
+    fastest region's plan is the answer (``fastest``).
     """
     s = settings
     _check_group(request.group_name, srdf)
@@ -117,8 +119,8 @@ def goal_jobs(label: str, request: Any, settings: Settings, srdf: str,
         named = label if count == 1 else f'{label} region {k + 1}/{count}'
         if goal.visibility_constraints:
             raise Refusal('INVALID_GOAL_CONSTRAINTS', 'visibility constraints are not offered')
-        job = (_joint_goal_job if goal.joint_constraints else _tip_goal_job)(
-            named, goal, s, Future(), start)
+        job = (_joint_goal_job(named, goal, s, Future(), start) if goal.joint_constraints
+               else _tip_goal_job(named, goal, s, Future(), start, with_tf))
         changes: dict[str, Any] = {}
         if scale:                                 # MoveIt's rule: any other factor means 1
             changes['motion'] = dataclasses.replace(s.request.motion, **scale)
@@ -154,7 +156,7 @@ def _budget(asked: float, name: str, settings: Settings,
 
 
 def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
-           ignored: Callable[[str], None]) -> Job:
+           ignored: Callable[[str], None], with_tf: bool = False) -> Job:
     """
     Return the job of a PositionIKRequest: the tip link's pose, planned from the seed state.
 
@@ -167,7 +169,7 @@ def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
                                                   'offered: the pose is solved as given')
     start = _start_state(ik.robot_state, s)
     _check_link(ik.ik_link_name, s)
-    frame = _frame(ik.pose_stamped.header.frame_id, s)
+    frame = _frame(ik.pose_stamped.header.frame_id, s, with_tf)
     p, o = ik.pose_stamped.pose.position, ik.pose_stamped.pose.orientation
     q = (o.x, o.y, o.z, o.w)
     problem = rotation_problem(q)
@@ -178,8 +180,9 @@ def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
         s.arm.tool_point)
     goal = s.request.goal.replace(position=point, frame=frame, mode=Mode.POSE,
                                   orientation=np.asarray(q) / np.linalg.norm(q))
+    stamp = ik.pose_stamped.header.stamp
     job = Job(label, goal, future=Future(), plan_only=True, start_state=start,
-              answer_path=False)
+              answer_path=False, stamp=(stamp.sec, stamp.nanosec))
     timeout = ik.timeout.sec + 1e-9 * ik.timeout.nanosec
     job.request_changes = {'max_planning_time': _budget(timeout, 'timeout', s, ignored)}
     if not ik.avoid_collisions:
@@ -198,7 +201,7 @@ def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np
     into = np.linalg.inv(settings.frames.to_base(frame, angles))
     poses = []
     for link in request.fk_link_names:
-        problem = frame_problem(link, settings) if link else 'an empty link name'
+        problem = frame_problem(link, settings, False) if link else 'an empty link name'
         if problem:
             raise Refusal('INVALID_LINK_NAME', problem)
         poses.append(into @ settings.frames.to_base(link, angles))
@@ -206,7 +209,7 @@ def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np
 
 
 def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,
-                  start: dict[str, float]) -> Job:
+                  start: dict[str, float], with_tf: bool) -> Job:
     """Return the job of a position (and orientation) goal on the tip."""
     if len(goal.position_constraints) != 1 or len(goal.orientation_constraints) > 1:
         raise Refusal('INVALID_GOAL_CONSTRAINTS',
@@ -215,14 +218,15 @@ def _tip_goal_job(label: str, goal: Any, settings: Settings, future: Any,
                       'position constraint is planned, with at most one orientation constraint')
     position = goal.position_constraints[0]
     _check_link(position.link_name, settings)
-    frame = _frame(position.header.frame_id, settings)
+    frame = _frame(position.header.frame_id, settings, with_tf)
     centre, radius = _region(position)
     region = Goal(centre, tolerance=radius, frame=frame)
     if goal.orientation_constraints:
         region = _oriented(region, goal.orientation_constraints[0], settings)
     _check_offset(position, settings)
+    stamp = position.header.stamp
     return Job(label, region, future=future, plan_only=True, start_state=start,
-               answer_path=False)
+               answer_path=False, stamp=(stamp.sec, stamp.nanosec))
 
 
 def _joint_goal_job(label: str, goal: Any, settings: Settings, future: Any,
@@ -308,8 +312,8 @@ def _check_link(link: str, settings: Settings) -> None:
                                            f"the tip link '{tip}'")
 
 
-def _frame(frame: str, settings: Settings) -> str:
-    problem = frame_problem(frame, settings)
+def _frame(frame: str, settings: Settings, with_tf: bool = False) -> str:
+    problem = frame_problem(frame, settings, with_tf)
     if problem:
         raise Refusal('FRAME_TRANSFORM_FAILURE', problem)
     return frame
@@ -399,6 +403,8 @@ def error_code(outcome: Outcome | None, job: Job) -> tuple[str, str]:
         return 'SUCCESS', outcome.reason
     if outcome.start_collides:
         return 'START_STATE_IN_COLLISION', outcome.reason
+    if outcome.frame_failed:
+        return 'FRAME_TRANSFORM_FAILURE', outcome.reason
     result = outcome.result
     status = result.status if result is not None else None
     if status is PlanStatus.TIMED_OUT:

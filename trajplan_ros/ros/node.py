@@ -19,10 +19,13 @@ Interfaces (all names relative, so namespaces and ``--ros-args -r`` remapping ap
   ``move_action`` and ``trajectory_execution_event`` for MoveIt's clients
   (``ros.move_group``): its plans are the node's calls, its executions go through the same
   ``ActionExecution``.
-* Frames: a stamped goal (``goal_pose``, ``clicked_point``, the services) in any link frame
-  of the robot's URDF is brought into ``base_frame`` by the robot's own forward kinematics at
-  its current joint angles (``kinematics.frames``); any other frame is refused, naming the
-  frames it knows.
+* Frames (``ros.transforms``): a stamped goal (``goal_pose``, ``clicked_point``, the
+  services, MoveIt's constraints) is brought into ``base_frame`` through tf where tf2 loads
+  (a Buffer fed by ``/tf`` and ``/tf_static``): at its stamp (zero: the newest), the worker
+  waiting up to ``transform_timeout`` for it, else refused with tf's reason. A link of the
+  robot's URDF that tf does not know is posed by the robot's own forward kinematics at the
+  start of the plan. Obstacles (markers, MoveIt's objects) are posed as their frame is when
+  they arrive. Without tf2, other frames are refused, naming the URDF's.
 * ``joint_trajectory`` (out; with ``execution: topic``), ``planned_path`` (nav_msgs/msg/Path,
   out, for RViz), ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray, out, 1 Hz).
 * ``plan_results`` (diagnostic_msgs/msg/DiagnosticStatus, out): how each goal and call ended
@@ -85,6 +88,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Point, PointStamped, Pose, PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
+import numpy as np
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 import rclpy
@@ -115,6 +119,7 @@ from trajplan_ros.ros.move_group import MoveGroupServer, NodeHooks
 from trajplan_ros.ros.quick_log import QuickLogger
 from trajplan_ros.ros.scene_topics import LiveScene, world_markers
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
+from trajplan_ros.ros.transforms import frame_pose, frame_problem, listen, Transforms
 from visualization_msgs.msg import MarkerArray
 
 
@@ -152,19 +157,21 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
     return descriptor
 
 
-def request_problem(request: GetPlan.Request, settings: Settings) -> str | None:
+def request_problem(request: GetPlan.Request, settings: Settings,
+                    tf: Transforms | None = None) -> str | None:
     """Return why a GetPlan request is refused before planning, or None."""
     tolerance = request.tolerance
     if not math.isfinite(tolerance) or tolerance < 0:
         return (f'tolerance {tolerance} m is not allowed: give 0 (use the tolerance parameter) '
                 'or a positive finite value')
-    return goal_problem(request.goal.header.frame_id, _quaternion(request.goal.pose), settings)
+    return goal_problem(request.goal.header.frame_id, _quaternion(request.goal.pose), settings,
+                        tf)
 
 
-def goal_problem(frame: str, orientation: tuple[float, ...] | None,
-                 settings: Settings) -> str | None:
+def goal_problem(frame: str, orientation: tuple[float, ...] | None, settings: Settings,
+                 tf: Transforms | None = None) -> str | None:
     """Return why a goal in ``frame`` (a pose's ``orientation``) cannot be planned, or None."""
-    problem = jobs.frame_problem(frame, settings)
+    problem = frame_problem(frame, settings, tf is not None)
     if problem is None and settings.goal_orientation != 'ignore' and orientation is not None:
         problem = jobs.rotation_problem(orientation)
     return problem
@@ -223,10 +230,10 @@ class PlannerNode(Node):
                                  qos_profile_sensor_data)
         self.create_subscription(String, 'robot_description', self._on_description, LATCHED)
         self._markers = self.create_publisher(MarkerArray, 'collision_markers', LATCHED)
-        self.create_subscription(String, 'robot_description_semantic', self._on_semantic,
-                                 LATCHED)
+        self.create_subscription(String, 'robot_description_semantic', self._on_semantic, LATCHED)
         self.create_subscription(MarkerArray, 'collision_objects', self._on_collision_objects,
                                  KEEP_ALL)
+        self._tf = listen(self)                   # frames beyond the URDF (None: no tf2)
         self._publish_markers(self._settings)
         self._execution: ActionExecution | None = None    # created when execution is action
         self._use_execution(self._settings)
@@ -410,7 +417,12 @@ class PlannerNode(Node):
         return MoveGroupServer(self, NodeHooks(
             lambda: self._settings, self._semantic, self._queue_call, self._action_execution,
             self._report_execution, self._header, self._call_ids, self._joint_angles,
-            lambda obstacles: self._use_live(moveit=obstacles)), calls, KEEP_ALL)
+            lambda obstacles: self._use_live(moveit=obstacles), self._pose_now, self._tf),
+            calls, KEEP_ALL)
+
+    def _pose_now(self, frame: str) -> np.ndarray:
+        """Return a frame's pose in the base frame now, not waiting (ValueError: not known)."""
+        return frame_pose(frame, self._settings, self._joint_angles(), self._tf)
 
     def _joint_angles(self) -> dict[str, float]:
         """Return the chain's joint angles now (joint_states, else the planned start)."""
@@ -425,7 +437,7 @@ class PlannerNode(Node):
     def _on_collision_objects(self, msg: MarkerArray) -> None:
         """Change the scene of the next plan by markers, or refuse them all with the reason."""
         try:
-            obstacles = self._live.apply(msg, self._settings.base_frame)
+            obstacles = self._live.apply(msg, self._pose_now)
             self._use_live(markers=obstacles)
         except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
             self.get_logger().warning(f'collision_objects refused, scene kept: {_reason(exc)}')
@@ -442,7 +454,7 @@ class PlannerNode(Node):
     def _take_goal(self, job: Job) -> None:
         """Queue a topic goal (the newest waits), or refuse it when its frame is unknown."""
         self._counters.add('goals_received')
-        problem = goal_problem(job.goal.frame, job.goal.orientation, self._settings)
+        problem = goal_problem(job.goal.frame, job.goal.orientation, self._settings, self._tf)
         if problem:
             self._counters.add('goals_failed')
             self._refused(job, problem)
@@ -462,12 +474,14 @@ class PlannerNode(Node):
     def _on_clicked_point(self, msg: PointStamped) -> None:
         p = msg.point
         self._take_goal(Job(f'clicked_point #{next(self._goal_ids)}', jobs.message_goal(
-            self._settings, (p.x, p.y, p.z), msg.header.frame_id)))
+            self._settings, (p.x, p.y, p.z), msg.header.frame_id),
+            stamp=(msg.header.stamp.sec, msg.header.stamp.nanosec)))
 
     def _on_goal_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
         self._take_goal(Job(f'goal_pose #{next(self._goal_ids)}', jobs.message_goal(
-            self._settings, (p.x, p.y, p.z), msg.header.frame_id, _quaternion(msg.pose))))
+            self._settings, (p.x, p.y, p.z), msg.header.frame_id, _quaternion(msg.pose)),
+            stamp=(msg.header.stamp.sec, msg.header.stamp.nanosec)))
 
     def _on_joint_states(self, msg: JointState) -> None:
         self._states.update(msg.name, msg.position, self._settings.arm.joint_names)
@@ -491,7 +505,7 @@ class PlannerNode(Node):
         job = Job(f"{'compute_plan' if plan_only else 'service'} call #{next(self._call_ids)}",
                   goal, future=Future(), stamp=(stamp.sec, stamp.nanosec), plan_only=plan_only)
         response.plan = Path(header=self._header(s.base_frame))
-        outcome = await self._queue_call(job, request_problem(request, s))
+        outcome = await self._queue_call(job, request_problem(request, s, self._tf))
         if outcome is not None and outcome.path is not None:
             response.plan = outcome.path
         return response
@@ -618,7 +632,10 @@ class PlannerNode(Node):
         if job.start_state:
             start = start.given(job.start_state, 'the request')
         self._log.debug(f'planning {job.label} {describe_goal(job.point)} m')
-        outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set)
+        angles = dict(zip(s.arm.joint_names, start.q))
+        outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
+                           lambda frame: frame_pose(frame, s, angles, self._tf,
+                                                    job.stamp or (0, 0), s.transform_timeout))
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
         if outcome.timed_out:

@@ -5,15 +5,17 @@ What became of each goal and call, as diagnostic_msgs/DiagnosticStatus on ``plan
 
 GetPlan has no field for a reason and a topic goal has no answer, so the node publishes one
 status per goal and per call when it ends: planned, refused, not reached, timed out,
-superseded or unplanned at shutdown. A caller finds its own by what it sent: a call by its
-``goal.header.stamp`` (which the client makes unique), a topic goal by its point among the
-outcomes that arrive after it sent it (the ones before are a late joiner's history). The
-status's ``message`` is the reason, as the node logs it.
+superseded or unplanned at shutdown. A caller finds its own by what it sent: a call or a
+stamped goal (PoseStamped, PointStamped) by its ``header.stamp`` (which the client makes
+unique), a Point goal by its point among the outcomes that arrive after it sent it (the ones
+before are a late joiner's history). The status's ``message`` is the reason, as the node logs
+it.
 
 Fields: ``level`` OK (planned), WARN (superseded, or unplanned at shutdown) or ERROR (every
 other end); ``name`` the node and the job (``/trajplan: service call #3``); ``values``:
-``request`` (``service call`` or ``goal``), ``stamp`` (a call's ``sec.nanosec``, else empty),
-``x``, ``y``, ``z`` (the goal, m, exact decimal round trip), ``status`` (``succeeded``,
+``request`` (``service call`` or ``goal``), ``stamp`` (a call's or a stamped goal's
+``sec.nanosec``, else empty), ``x``, ``y``, ``z`` (the goal, m, exact decimal round trip; in
+the base frame once its frame is posed), ``status`` (``succeeded``,
 ``rejected``, ``not_reached``, ``timed_out``, ``cancelled``, ``refused``, ``superseded``,
 ``shut_down`` or ``failed``), ``stage`` (``plan``), ``motion_time_s`` and ``via_points``
 (how many via points the motion rests at: 0 for a direct motion; both empty unless planned),

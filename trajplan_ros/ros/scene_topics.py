@@ -7,8 +7,10 @@ In, on ``collision_objects`` (visualization_msgs/MarkerArray), as RViz draws the
 = the box's size), SPHERE (scale = diameter, refused unless x = y = z), CYLINDER (scale.x =
 scale.y = diameter, scale.z = height). A marker is identified by (ns, id), its obstacle id is
 ``ns/id``; ADD (or MODIFY) puts it in, DELETE takes it out, DELETEALL takes out all of its ns,
-or everything with an empty ns, as RViz does. Its frame must be the base frame. One bad marker
-refuses the whole message, with the reason, and the scene stays as it was (``LiveScene``).
+or everything with an empty ns, as RViz does. Its frame may be any the node can pose
+(``transforms.frame_pose``): it is placed in the base frame as that frame is when the message
+arrives, and stays there. One bad marker refuses the whole message, with the reason, and the
+scene stays as it was (``LiveScene``).
 
 Out, on ``collision_markers`` (latched): the scene's obstacles in the base frame, and each
 link's spheres (the conservative model, ``collision.spheres``) in the link's own frame, which
@@ -16,7 +18,7 @@ robot_state_publisher's TF places.
 """
 from __future__ import annotations
 
-from typing import Iterable, TYPE_CHECKING
+from typing import Callable, Iterable, TYPE_CHECKING
 
 from geometry_msgs.msg import Vector3
 import numpy as np
@@ -48,8 +50,14 @@ class LiveScene:
         """Return every obstacle received, markers' first."""
         return tuple(self.obstacles.values()) + self.moveit
 
-    def apply(self, msg: MarkerArray, base_frame: str) -> dict[str, Obstacle]:
-        """Return the obstacles after ``msg`` (InvalidCollisionInput: none of it applied)."""
+    def apply(self, msg: MarkerArray,
+              pose_of: Callable[[str], np.ndarray]) -> dict[str, Obstacle]:
+        """
+        Return the obstacles after ``msg`` (InvalidCollisionInput: none of it applied).
+
+        ``pose_of(frame)``: the 4x4 pose of a marker's frame in the base frame now (ValueError
+        for a frame it cannot pose).
+        """
         out = dict(self.obstacles)
         for marker in msg.markers:
             ident = f'{marker.ns}/{marker.id}'
@@ -59,7 +67,7 @@ class LiveScene:
             elif marker.action == Marker.DELETE:
                 out.pop(ident, None)
             elif marker.action == Marker.ADD:
-                out[ident] = _obstacle(marker, ident, base_frame)
+                out[ident] = _obstacle(marker, ident, pose_of)
             else:
                 raise InvalidCollisionInput(f'marker {ident}: action {marker.action} is not '
                                             'ADD, DELETE or DELETEALL')
@@ -67,14 +75,15 @@ class LiveScene:
         return out
 
 
-def _obstacle(marker: Marker, ident: str, base_frame: str) -> Obstacle:
-    """Return the obstacle of an ADD marker, or refuse it with the reason."""
+def _obstacle(marker: Marker, ident: str, pose_of: Callable[[str], np.ndarray]) -> Obstacle:
+    """Return the obstacle of an ADD marker in the base frame, or refuse it with the reason."""
     where = f'marker {ident}'
-    if marker.header.frame_id != base_frame:
-        raise InvalidCollisionInput(f"{where}: frame '{marker.header.frame_id}' is not the base "
-                                    f"frame '{base_frame}'")
+    try:
+        frame = pose_of(marker.header.frame_id)
+    except ValueError as exc:
+        raise InvalidCollisionInput(f'{where}: {exc}') from None
     s = marker.scale
-    pose = pose_matrix_of(marker.pose, where)
+    pose = frame @ pose_matrix_of(marker.pose, where)
     if marker.type == Marker.CUBE:
         shape = Shape.primitive('box', (s.x, s.y, s.z), pose, where)
     elif marker.type == Marker.SPHERE:

@@ -193,6 +193,10 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "execution action: the controller's FollowJointTrajectory action; a relative "
                   "name is in the node's namespace and remapping applies, an absolute one such "
                   'as /arm_controller/follow_joint_trajectory is used as it is'),
+    ParameterSpec('transform_timeout', 0.5,
+                  'how long a stamped goal waits for its frame from tf (tf2 needed for frames '
+                  "outside the arm's URDF), s; the newest transform for a stamp of zero",
+                  bounds=(0.0, 60.0)),
     ParameterSpec('start_tolerance', 0.05,
                   "execution action: largest difference between a plan's start and the newest "
                   'joint_states, per joint, for the motion to be sent, rad; 0: not checked',
@@ -251,6 +255,8 @@ class Settings:
     controller_timeout: float = 5.0
     #: plan_kinematic_path: the least search time a MoveIt request gets, s (0: as asked).
     min_planning_time: float = 0.0
+    #: How long a stamped goal waits for its frame's transform from tf, s.
+    transform_timeout: float = 0.5
 
     @property
     def arm(self) -> ArmModel:
@@ -328,6 +334,7 @@ class Settings:
                    start_tolerance=values['start_tolerance'],
                    controller_timeout=values['controller_timeout'],
                    min_planning_time=values['min_planning_time'],
+                   transform_timeout=values['transform_timeout'],
                    diagnostic_period=values['diagnostic_updater.period'])
 
 

@@ -149,6 +149,11 @@ def _is_point(goal: Goal) -> Callable[[dict[str, str]], bool]:
         float(v[axis]) for axis in 'xyz') == tuple(float(c) for c in goal)
 
 
+def _has_stamp(stamp: str) -> Callable[[dict[str, str]], bool]:
+    """Tell a stamped topic goal's outcome by its stamp."""
+    return lambda v: v['request'] == 'goal' and v['stamp'] == stamp
+
+
 def call_planner(ros: Any, goal: Goal, *, service: str, tolerance: float, timeout: float,
                  trajectory_topic: str | None, results_topic: str | None = None,
                  frame: str = '', wait_execution: bool = False) -> int:
@@ -214,23 +219,35 @@ def _run_call(args: argparse.Namespace) -> int:
 def _run_goal(args: argparse.Namespace) -> int:
     _need_rclpy()
     from diagnostic_msgs.msg import DiagnosticStatus
-    from geometry_msgs.msg import Point
+    from geometry_msgs.msg import Point, PoseStamped
+    from std_msgs.msg import Header
     from trajectory_msgs.msg import JointTrajectory
     from trajplan_ros.ros import outcomes
     from trajplan_ros.tools.ros_client import RosClient
 
     x, y, z = goal = _goal(args)
+    topic = args.topic or ('goal_pose' if args.frame else 'goal')
+    kind = PoseStamped if args.frame else Point
     with RosClient('trajplan_goal') as ros:
-        results = ros.inbox(DiagnosticStatus, args.results or _beside(args.topic, outcomes.TOPIC),
+        results = ros.inbox(DiagnosticStatus, args.results or _beside(topic, outcomes.TOPIC),
                             args.timeout, outcomes.QOS)
         box = (ros.inbox(JointTrajectory, args.trajectory, args.timeout) if args.trajectory
                else None)
-        ros.publisher(Point, args.topic, args.timeout)   # matched: the history has come
+        ros.publisher(kind, topic, args.timeout)        # matched: the history has come
         while not results.empty():                # earlier goals' outcomes (history): not ours
             results.get_nowait()
-        ros.publish(Point, args.topic, Point(x=x, y=y, z=z), timeout=args.timeout)
-        print(f'published goal ({x}, {y}, {z}) m on {args.topic}')
-        plan = _outcome(results, args.timeout, 'the goal', _is_point(goal))
+        if args.frame:                            # told apart by its stamp, as a call is
+            msg = PoseStamped(header=Header(frame_id=args.frame,
+                                            stamp=ros.node.get_clock().now().to_msg()))
+            msg.pose.position, msg.pose.orientation.w = Point(x=x, y=y, z=z), 1.0
+            ours = _has_stamp(outcomes.describe_stamp((msg.header.stamp.sec,
+                                                       msg.header.stamp.nanosec)))
+        else:
+            msg, ours = Point(x=x, y=y, z=z), _is_point(goal)
+        ros.publish(kind, topic, msg, timeout=args.timeout)
+        where = f" in frame '{args.frame}'" if args.frame else ''
+        print(f'published goal ({x}, {y}, {z}) m{where} on {topic}')
+        plan = _outcome(results, args.timeout, 'the goal', ours)
         if plan['status'] != 'succeeded':
             print(f'trajplan: not planned: {_line(plan)}', file=sys.stderr)
             return 1
@@ -257,7 +274,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     for axis in 'xyz':
         p.add_argument(axis, type=finite_number, metavar=axis.upper(),
                        help=f"tool goal's {axis} in metres, in the planner's base frame "
-                            '(call: or --frame)')
+                            '(or --frame)')
     p.add_argument('--timeout', type=float, default=30.0,
                    help='seconds to wait for the node and for each answer (default 30)')
     p.add_argument('--trajectory', metavar='TOPIC', nargs='?', const='joint_trajectory',
@@ -282,9 +299,7 @@ def add_call_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--service',
                    help='service name (default plan_trajectory, or compute_plan with '
                         '--plan-only; e.g. /arm1/plan_trajectory)')
-    p.add_argument('--frame', default='',
-                   help="the goal's frame: any link of the robot's URDF (default: the node's "
-                        'base_frame)')
+    _frame_argument(p)
     p.add_argument('--plan-only', action='store_true',
                    help='call compute_plan: the plan is answered, not sent to the controller')
     p.add_argument('--tolerance', type=finite_number, default=0.0,
@@ -296,10 +311,19 @@ def add_call_parser(sub: argparse._SubParsersAction) -> None:
 def add_goal_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``trajplan goal``: one goal on the goal topic, as ``ros2 topic pub --once`` would."""
     p = sub.add_parser('goal', help='publish a goal to a running planner node',
-                       description='Publish one geometry_msgs/Point on the goal topic, once the '
+                       description='Publish one geometry_msgs/Point on the goal topic (with '
+                                   '--frame a PoseStamped on goal_pose), once the '
                                    "node subscribes, and wait for its outcome on the node's "
                                    'plan_results. Exit status 0: planned; 1: not planned (the '
                                    'reason on stderr) or no answer in time.')
     _common(p)
-    p.add_argument('--topic', default='goal', help='goal topic (default goal)')
+    _frame_argument(p)
+    p.add_argument('--topic', help='goal topic (default goal; goal_pose with --frame, where a '
+                                   'PoseStamped goes, its orientation the identity)')
     p.set_defaults(run=_run_goal)
+
+
+def _frame_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument('--frame', default='',
+                   help="the goal's frame: a link of the robot's URDF, or any frame tf knows "
+                        "where the node has tf2 (default: the node's base_frame)")
