@@ -131,6 +131,15 @@ def end_of(box, goal: np.ndarray) -> np.ndarray:
     return np.array(trajectory_to(box, tuple(goal)).points[-1].positions)
 
 
+def outcome(results, stamp: str) -> tuple[DiagnosticStatus, dict[str, str]]:
+    """Return the plan_results status of the call stamped ``stamp``, and its values."""
+    while True:
+        status = results.get(timeout=LIVENESS_S)
+        values = {v.key: v.value for v in status.values}
+        if values['stamp'] == stamp:
+            return status, values
+
+
 def call(peer: RosClient, goal: np.ndarray, frame: str,
          stamp: tuple[int, int] = (0, 0)) -> GetPlan.Response:
     request = plan_request(tuple(goal))
@@ -192,11 +201,7 @@ def test_a_frame_that_never_comes_is_refused_within_the_timeout(planner: NodePro
     clock = time.monotonic()
     assert not call(peer, TARGET, 'nowhere_link', (5, 7)).plan.poses
     took = time.monotonic() - clock
-    while True:
-        status = results.get(timeout=LIVENESS_S)
-        values = {v.key: v.value for v in status.values}
-        if values['stamp'] == '5.000000007':
-            break
+    status, values = outcome(results, '5.000000007')
     assert values['status'] == 'refused', values
     assert re.search(r"frame 'nowhere_link' has no transform to 'base_link' at stamp "
                      r'5\.000000007 within 2 s', status.message), status
@@ -222,11 +227,7 @@ def test_a_marker_in_the_camera_frame_blocks_the_motion_it_should(
     planner.wait_for(r'scene for the next plan: 1 obstacles from collision_objects', mark)
     results = peer.inbox(DiagnosticStatus, f'{NS}/plan_results', qos=outcomes.QOS)
     assert call(peer, goal, 'base_link', (9, 1)).plan.poses
-    while True:
-        status = results.get(timeout=LIVENESS_S)
-        values = {v.key: v.value for v in status.values}
-        if values['stamp'] == '9.000000001':
-            break
+    _, values = outcome(results, '9.000000001')
     assert values['status'] == 'succeeded', values
     assert float(values['motion_time_s']) > free.motion_time_s + 1e-3, planner.output[-2000:]
     assert float(values['clearance_m']) >= 0.01 and values['clearance_pair'], values
