@@ -111,7 +111,8 @@ def broadcast(tf2_env: dict[str, str]) -> Iterator:
 def planner(start_node, tf2_env: dict[str, str], broadcast) -> Iterator[NodeProcess]:
     """One node with tf2 and the collision check, beside a static camera_link."""
     node = start_node('-r', f'__ns:={NS}', '-p', 'collision_check:=true', '-p',
-                      f'transform_timeout:={TIMEOUT}', env=tf2_env)
+                      f'transform_timeout:={TIMEOUT}', '-p', 'max_planning_time:=30.0',
+                      env=tf2_env)                    # (a busy machine's detours take long)
     assert 'need tf2' not in node.output
     broadcast('static', 'camera_link')
     yield node
