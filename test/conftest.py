@@ -115,8 +115,9 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory, ros_env: dict[str, 
 #: ROS_INTERFACES_SRC names, else ``shared/ros_interfaces`` beside this clone.
 ROS_INTERFACES = Path(os.environ.get('ROS_INTERFACES_SRC')
                       or REPO.parent / 'shared' / 'ros_interfaces')
-#: tf2's Python side (tf2_ros_py and what it needs): TF2_SRC, else ``shared/tf2``.
-TF2 = Path(os.environ.get('TF2_SRC') or REPO.parent / 'shared' / 'tf2')
+#: tf2's Python side (tf2_ros_py and what it needs): TF2_SRC, else ``tf2`` beside the
+#: interface sources (both are in ``shared/``).
+TF2 = Path(os.environ.get('TF2_SRC') or ROS_INTERFACES.parent / 'tf2')
 #: Each package a test needs, by the fixture that gives it: its sources, and how the node
 #: loads it.
 INTERFACES = {

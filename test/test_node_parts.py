@@ -192,13 +192,14 @@ def test_other_robots_joints_are_not_checked_and_repeats_are_flushed() -> None:
 class StaticTf:
     """What tf knows, as ``transforms.Transforms`` answers: fixed poses by frame."""
 
-    def __init__(self, poses: dict[str, np.ndarray]) -> None:
-        self.poses = poses
+    def __init__(self, poses: dict[str, np.ndarray], newest_only: tuple[str, ...] = ()) -> None:
+        self.poses, self.newest_only = poses, newest_only
 
     def knows(self, target: str, frame: str) -> bool:
-        return frame in self.poses
+        return frame in self.poses or frame in self.newest_only
 
-    def pose(self, target: str, frame: str, stamp: tuple[int, int], timeout: float) -> np.ndarray:
+    def pose(self, target: str, frame: str, stamp: tuple[int, int], timeout: float,
+             stop: object = None) -> np.ndarray:
         if frame not in self.poses:
             raise ValueError(f"frame '{frame}' has no transform")
         return self.poses[frame]
@@ -217,6 +218,8 @@ def test_a_frame_is_posed_by_tf_where_tf_knows_it_else_by_the_urdf() -> None:
     np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, tf), by_fk)   # not in tf
     np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, StaticTf({link: camera})),
                                   camera)                                          # tf wins
+    np.testing.assert_array_equal(frame_pose(link, SETTINGS, angles, StaticTf({}, (link,)),
+                                             (5, 0)), by_fk)     # not at the stamp: the URDF
     with pytest.raises(ValueError, match="frame 'camera_link' is not a link of the robot; .* "
                                          r'\(other frames need tf2\)'):
         frame_pose('camera_link', SETTINGS, angles, None)

@@ -186,12 +186,17 @@ def test_a_moving_frame_is_taken_at_the_goal_s_stamp(planner: NodeProcess, peer:
     box = trajectories(peer)
     t0 = time.time()
     broadcast('moving', 'sensor_link', t0)
-    wait_until(lambda: call(peer, in_camera(TARGET), 'sensor_link').plan.poses,
-               what='the node to know sensor_link')            # DDS has matched the /tf
+
+    def sensor_known() -> bool:                 # TARGET, where the sensor is now: reachable
+        now = SHIFT + VELOCITY * (time.time() - t0)
+        return bool(call(peer, in_camera(TARGET, now), 'sensor_link').plan.poses)
+
+    wait_until(sensor_known, what='the node to know sensor_link')   # DDS has matched the /tf
     when = peer.node.get_clock().now().nanoseconds + 300_000_000    # 0.3 s on: it waits
     stamp = (when // 10**9, when % 10**9)
     shift = SHIFT + VELOCITY * (when * 1e-9 - t0)          # the sensor then: TARGET is there
-    assert call(peer, in_camera(TARGET, shift), 'sensor_link', stamp).plan.poses
+    assert call(peer, in_camera(TARGET, shift), 'sensor_link', stamp).plan.poses, \
+        planner.output[-3000:]
     end = end_of(box, TARGET)                               # (1.5 cm off at any other time)
     np.testing.assert_allclose(ARM.tool(end[None])[0][0], TARGET, atol=1e-6)
 
@@ -230,8 +235,11 @@ def test_a_marker_in_the_camera_frame_blocks_the_motion_it_should(
     assert call(peer, goal, 'base_link', (9, 1)).plan.poses
     _, values = outcome(results, '9.000000001')
     assert values['status'] == 'succeeded', values
-    assert float(values['motion_time_s']) > free.motion_time_s + 1e-3, planner.output[-2000:]
-    assert float(values['clearance_m']) >= 0.01 and values['clearance_pair'], values
+    # not the direct motion, which passes through the ball: through a via point (which may
+    # cost nothing where one joint's travel sets the time), or a slower one
+    assert (values['via_points'] != '0'
+            or float(values['motion_time_s']) > free.motion_time_s + 1e-3), values
+    assert float(values['clearance_m']) >= 0.01 and 'seen/1' in values['clearance_pair'], values
 
 
 def test_the_readme_camera_block_runs_as_pasted(start_node, tf2_env: dict[str, str],

@@ -576,7 +576,8 @@ def prepare(*requests: PlanRequest,
             goal = request.goal
             orientation = (quaternions(frame[None, :3, :3])[0] if goal.mode is Mode.POSE
                            else goal.orientation)
-            goal = goal.replace(position=frame[:3, 3], orientation=orientation, joint_goal=None)
+            goal = goal.replace(position=frame[:3, 3], orientation=orientation, joint_goal=None,
+                                frame='')
             plan(request.replace(goal=goal, start=None, seed=0, max_planning_time=None, world=None,
                                  population=_DEFAULTS.population,
                                  max_iterations=_DEFAULTS.max_iterations))

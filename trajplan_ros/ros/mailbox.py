@@ -44,7 +44,7 @@ class Job:
     stamp: tuple[int, int] | None = None
     plan_only: bool = False                  # answered, never sent to the controller
     #: changes to the settings' PlanRequest for this job alone (a MoveIt request's time
-    #: budget and scaling)
+    #: budget and scaling; compute_ik's world None when it ignores collisions)
     request_changes: Mapping[str, Any] = field(default_factory=dict)
     start_state: Mapping[str, float] = field(default_factory=dict)   # joint angles it gives
     answer_path: bool = True                 # a call's answer holds the tool path (GetPlan)

@@ -15,7 +15,7 @@ into it, not to its centre (``search.region``). An OrientationConstraint beside 
 goal a pose (its least tolerance the orientation tolerance), or, with the z tolerance pi or
 more, an approach goal (the tool's z axis within the lesser of the x and y tolerances of the
 orientation's z axis); all three pi or more: position only. JointConstraints instead are a
-joint goal: the motion to those angles (``PlanRequest.joint_goal``). What a direct motion
+joint goal: the motion to those angles (``Goal.joint_goal``). What a direct motion
 cannot promise (path constraints, visibility constraints) is refused with the reason, never
 ignored. moveit_msgs is not on PyPI: ``moveit_types`` says how to get it.
 """
@@ -201,7 +201,7 @@ def fk_poses(request: Any, settings: Settings, now: dict[str, float]) -> list[np
     into = np.linalg.inv(settings.frames.to_base(frame, angles))
     poses = []
     for link in request.fk_link_names:
-        problem = frame_problem(link, settings, False) if link else 'an empty link name'
+        problem = _urdf_problem(link, settings) if link else 'an empty link name'
         if problem:
             raise Refusal('INVALID_LINK_NAME', problem)
         poses.append(into @ settings.frames.to_base(link, angles))
@@ -312,8 +312,19 @@ def _check_link(link: str, settings: Settings) -> None:
                                            f"the tip link '{tip}'")
 
 
-def _frame(frame: str, settings: Settings, with_tf: bool = False) -> str:
-    problem = frame_problem(frame, settings, with_tf)
+def _urdf_problem(frame: str, settings: Settings) -> str | None:
+    """Return why ``frame`` is not the base or a link of the URDF, or None."""
+    try:
+        settings.frames.check(frame)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+def _frame(frame: str, settings: Settings, with_tf: bool | None = None) -> str:
+    """Return a request's frame (Refusal: one it cannot pose; None: a URDF link, not tf's)."""
+    problem = (_urdf_problem(frame, settings) if with_tf is None
+               else frame_problem(frame, settings, with_tf))
     if problem:
         raise Refusal('FRAME_TRANSFORM_FAILURE', problem)
     return frame

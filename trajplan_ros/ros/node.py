@@ -46,8 +46,9 @@ Concurrency, all of it:
 * One executor thread (a SingleThreadedExecutor) runs every callback. None of them blocks:
   the service callback is a coroutine that queues its call and ``await``s the call's Future.
 * One worker thread takes jobs from the ``Mailbox`` (calls in arrival order, then the newest
-  goal), plans them, publishes, and hands each call's answer back through a deque and the
-  guard condition ``_deliver``; the guard's callback completes the Futures on the executor
+  goal), poses each goal's frame (waiting for tf up to ``transform_timeout``, in slices that a
+  shutdown ends), plans them, publishes, and hands each call's answer back through a deque and
+  the guard condition ``_deliver``; the guard's callback completes the Futures on the executor
   thread. No Future is ever completed from another thread: rclpy 7.1.6 (PyPI) does not wake
   the executor for that, later Jazzy releases do; this path works with both.
 * The main thread waits for SIGINT or SIGTERM (rclpy's own signal handling is off), then
@@ -166,6 +167,16 @@ def request_problem(request: GetPlan.Request, settings: Settings,
                 'or a positive finite value')
     return goal_problem(request.goal.header.frame_id, _quaternion(request.goal.pose), settings,
                         tf)
+
+
+def _as_planned(job: Job, settings: Settings) -> Settings:
+    """Return the settings ``job`` plans with: its own changes, and its goal's kind."""
+    goal = job.goal
+    mode = Mode.POSE if goal.joint_goal is not None else goal.mode    # a joint goal: every joint
+    changes = dict(job.request_changes)
+    if mode is not settings.request.goal.mode:
+        changes['goal'] = settings.request.goal.replace(mode=mode)
+    return settings.planning_with(**changes) if changes else settings
 
 
 def goal_problem(frame: str, orientation: tuple[float, ...] | None, settings: Settings,
@@ -622,7 +633,7 @@ class PlannerNode(Node):
     def _plan(self, job: Job) -> jobs.Outcome:
         """Plan one job into its messages and log line."""
         s = self._settings
-        self._prepare_for(s.planning_with(**job.request_changes) if job.request_changes else s)
+        self._prepare_for(_as_planned(job, s))
         if s.execution == 'action':         # the controller's state: it is what moves first
             deadline = time.monotonic() + s.controller_timeout
             while not (self._states.wait_for(s.arm.joint_names, SHUTDOWN_STEP_S / 5)
@@ -635,7 +646,8 @@ class PlannerNode(Node):
         angles = dict(zip(s.arm.joint_names, start.q))
         outcome = jobs.run(job, s, start, self._header(s.base_frame), self._stopping.is_set,
                            lambda frame: frame_pose(frame, s, angles, self._tf,
-                                                    job.stamp or (0, 0), s.transform_timeout))
+                                                    job.stamp or (0, 0), s.transform_timeout,
+                                                    self._stopping.is_set))
         if outcome.plan_time_s is not None:
             self._counters.plan_time(outcome.plan_time_s)
         if outcome.timed_out:

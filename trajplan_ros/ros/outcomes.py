@@ -6,10 +6,10 @@ What became of each goal and call, as diagnostic_msgs/DiagnosticStatus on ``plan
 GetPlan has no field for a reason and a topic goal has no answer, so the node publishes one
 status per goal and per call when it ends: planned, refused, not reached, timed out,
 superseded or unplanned at shutdown. A caller finds its own by what it sent: a call or a
-stamped goal (PoseStamped, PointStamped) by its ``header.stamp`` (which the client makes
-unique), a Point goal by its point among the outcomes that arrive after it sent it (the ones
-before are a late joiner's history). The status's ``message`` is the reason, as the node logs
-it.
+stamped goal (PoseStamped, PointStamped) by its ``header.stamp`` (the client's send time,
+which makes it unique; it is also when the goal's frame is posed through tf), a Point goal by
+its point among the outcomes that arrive after it sent it (the ones before are a late
+joiner's history). The status's ``message`` is the reason, as the node logs it.
 
 Fields: ``level`` OK (planned), WARN (superseded, or unplanned at shutdown) or ERROR (every
 other end); ``name`` the node and the job (``/trajplan: service call #3``); ``values``:

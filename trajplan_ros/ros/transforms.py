@@ -12,7 +12,8 @@ blocks); obstacles do not: they take the newest transform when they arrive.
 """
 from __future__ import annotations
 
-from typing import Any, Mapping
+import time
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from rclpy.duration import Duration
@@ -23,6 +24,8 @@ from trajplan_ros.ros.settings import Settings
 
 __all__ = ['HOW_TO', 'Transforms', 'frame_pose', 'frame_problem', 'listen']
 
+#: How long a goal's wait for its frame goes on before it asks whether to stop, s.
+WAIT_SLICE = 0.1
 #: How to get tf2's Python side on each route.
 HOW_TO = ('with ROS from apt: sudo apt install ros-jazzy-tf2-ros-py; with the PyPI wheels: '
           'build ../shared/tf2 with ../shared/ros_interfaces/build_ros_interfaces.sh and put '
@@ -41,17 +44,26 @@ class Transforms:
         """Return whether tf can pose ``frame`` in ``target`` now (its latest transform)."""
         return self.buffer.can_transform(target, frame, Time())
 
-    def pose(self, target: str, frame: str, stamp: tuple[int, int], timeout: float) -> np.ndarray:
+    def pose(self, target: str, frame: str, stamp: tuple[int, int], timeout: float,
+             stop: Callable[[], bool] | None = None) -> np.ndarray:
         """
         Return the 4x4 pose of ``frame`` in ``target`` at ``stamp`` (sec, nanosec).
 
-        A stamp of zero takes the latest transform. Waits up to ``timeout`` s for it to come;
-        ValueError with the frame and tf2's error when it does not.
+        A stamp of zero takes the latest transform. Waits up to ``timeout`` s for it to come,
+        in slices of ``WAIT_SLICE`` after which ``stop()`` True ends the wait; ValueError with
+        the frame and tf2's error when it does not come.
         """
         when = Time(seconds=stamp[0], nanoseconds=stamp[1]) if any(stamp) else Time()
+        deadline = time.monotonic() + timeout
+        while not (self.buffer.can_transform(target, frame, when)
+                   or (stop is not None and stop())):
+            left = deadline - time.monotonic()
+            if left <= 0.0:
+                break
+            self.buffer.can_transform(target, frame, when,
+                                      Duration(seconds=min(left, WAIT_SLICE)))
         try:
-            found = self.buffer.lookup_transform(target, frame, when,
-                                                 timeout=Duration(seconds=timeout))
+            found = self.buffer.lookup_transform(target, frame, when)
         except self._tf2.TransformException as exc:
             at = 'the latest' if not any(stamp) else f'stamp {stamp[0]}.{stamp[1]:09d}'
             raise ValueError(f"frame '{frame}' has no transform to '{target}' at {at} within "
@@ -77,19 +89,25 @@ def listen(node: Node) -> Transforms | None:
 
 def frame_pose(frame: str, settings: Settings, angles: Mapping[str, float],
                transforms: Transforms | None, stamp: tuple[int, int] = (0, 0),
-               wait: float = 0.0) -> np.ndarray:
+               wait: float = 0.0, stop: Callable[[], bool] | None = None) -> np.ndarray:
     """
     Return the 4x4 pose of ``frame`` in the base frame (ValueError: why it cannot be had).
 
     tf's, where tf knows the frame now or the URDF does not have it (at ``stamp``, waiting up
-    to ``wait`` s); else the URDF's forward kinematics at joint ``angles``. '' is the base.
+    to ``wait`` s unless ``stop()``); else, and where tf has no transform of a URDF link at
+    that stamp, the URDF's forward kinematics at joint ``angles``. '' is the base.
     """
     base = settings.base_frame
     if not frame or frame == base:
         return np.eye(4)
     in_urdf = frame in settings.frames.links
-    if transforms is not None and (not in_urdf or transforms.knows(base, frame)):
-        return transforms.pose(base, frame, stamp, wait)
+    if transforms is not None and not in_urdf:
+        return transforms.pose(base, frame, stamp, wait, stop)
+    if transforms is not None and transforms.knows(base, frame):
+        try:
+            return transforms.pose(base, frame, stamp, wait, stop)
+        except ValueError:                         # not at that stamp: the robot's own FK
+            pass
     problem = frame_problem(frame, settings, transforms is not None)
     if problem:
         raise ValueError(problem)

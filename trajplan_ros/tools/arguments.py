@@ -22,7 +22,7 @@ __all__ = ['TOLERANCES', 'UsageError', 'add_arm_arguments', 'add_collision_argum
            'finite_number', 'motion_from_arguments', 'package_share', 'positive_count',
            'tolerances_from_arguments', 'world_from_arguments']
 
-#: The goal's tolerances by ``PlanRequest``'s names (the flags: --tolerance, ...).
+#: The goal's tolerances by ``Goal``'s names (the flags: --tolerance, ...).
 TOLERANCES = ('tolerance', 'axis_tolerance', 'orientation_tolerance')
 
 
@@ -117,7 +117,7 @@ def motion_from_arguments(args: argparse.Namespace) -> MotionProfile:
 
 def add_tolerance_arguments(parser: argparse.ArgumentParser, several: bool = False) -> None:
     """
-    Add the goal's tolerances: the region the plan reaches fastest (``PlanRequest``).
+    Add the goal's tolerances: the region the plan reaches fastest (``Goal``).
 
     ``several``: each flag takes one or more values (a benchmark of each).
     """
@@ -138,7 +138,7 @@ def add_tolerance_arguments(parser: argparse.ArgumentParser, several: bool = Fal
 
 
 def tolerances_from_arguments(args: argparse.Namespace) -> dict[str, float]:
-    """Return the tolerances given on the command line, by ``PlanRequest``'s names."""
+    """Return the tolerances given on the command line, by ``Goal``'s names."""
     return {name: getattr(args, name) for name in TOLERANCES if getattr(args, name) is not None}
 
 

@@ -317,8 +317,9 @@ def _run_plan(args: argparse.Namespace) -> int:
             goal = request.goal.replace(position=position)
             if layout.pointing:
                 mode = POINTING[layout.pointing]
-                goal = goal.replace(mode=mode, **{
-                    'approach' if mode is Mode.APPROACH else 'orientation': pointing})
+                goal = goal.replace(mode=mode, **({'approach': pointing, 'orientation': None}
+                                                  if mode is Mode.APPROACH
+                                                  else {'orientation': pointing}))
             line_request = request.replace(goal=goal, start=args.start if start is None
                                            else start)
             line_request.validate()

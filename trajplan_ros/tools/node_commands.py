@@ -319,7 +319,8 @@ def add_goal_parser(sub: argparse._SubParsersAction) -> None:
     _common(p)
     _frame_argument(p)
     p.add_argument('--topic', help='goal topic (default goal; goal_pose with --frame, where a '
-                                   'PoseStamped goes, its orientation the identity)')
+                                   "PoseStamped goes, its orientation the identity: the node's "
+                                   'goal_orientation approach or pose would plan to it)')
     p.set_defaults(run=_run_goal)
 
 
