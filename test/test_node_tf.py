@@ -230,7 +230,8 @@ def test_a_marker_in_the_camera_frame_blocks_the_motion_it_should(
                   pose=Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0)))
     mark = planner.mark()
     peer.publish(MarkerArray, f'{NS}/collision_objects', MarkerArray(markers=[ball]))
-    planner.wait_for(r'scene for the next plan: 1 obstacles from collision_objects', mark)
+    planner.wait_for(r'scene for the next plan: 1 obstacles from collision_objects; posed as '
+                     r"'camera_link' stood on arrival, and kept there", mark)
     results = peer.inbox(DiagnosticStatus, f'{NS}/plan_results', qos=outcomes.QOS)
     assert call(peer, goal, 'base_link', (9, 1)).plan.poses
     _, values = outcome(results, '9.000000001')

@@ -38,7 +38,7 @@ from trajplan_ros.ros.job import Outcome
 from trajplan_ros.ros.mailbox import Job
 from trajplan_ros.ros.messages import pose_msg
 from trajplan_ros.ros.settings import Settings
-from trajplan_ros.ros.transforms import Transforms
+from trajplan_ros.ros.transforms import arrival_note, Transforms
 
 __all__ = ['MoveGroupServer', 'NodeHooks']
 
@@ -321,7 +321,10 @@ class MoveGroupServer:
         self._objects.objects = objects
         log = self._node.get_logger()
         if checked:
-            log.info(f'scene for the next plan: {len(objects)} world objects from MoveIt')
+            frames = arrival_note((m.header.frame_id for m in messages
+                                   if m.operation in (m.ADD, m.APPEND, m.MOVE)),
+                                  self._hooks.settings())
+            log.info(f'scene for the next plan: {len(objects)} world objects from MoveIt{frames}')
         else:
             log.warning(f'{len(objects)} world objects from MoveIt held, but collision_check '
                         'is false: plans do not avoid them')

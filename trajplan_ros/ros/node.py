@@ -120,7 +120,8 @@ from trajplan_ros.ros.move_group import MoveGroupServer, NodeHooks
 from trajplan_ros.ros.quick_log import QuickLogger
 from trajplan_ros.ros.scene_topics import LiveScene, world_markers
 from trajplan_ros.ros.settings import PARAMETERS, ParameterSpec, Settings
-from trajplan_ros.ros.transforms import frame_pose, frame_problem, listen, Transforms
+from trajplan_ros.ros.transforms import (arrival_note, frame_pose, frame_problem, listen,
+                                         Transforms)
 from visualization_msgs.msg import MarkerArray
 
 
@@ -453,8 +454,10 @@ class PlannerNode(Node):
         except Exception as exc:  # noqa: BLE001 - untrusted input: any fault is a refusal
             self.get_logger().warning(f'collision_objects refused, scene kept: {_reason(exc)}')
             return
+        frames = arrival_note((m.header.frame_id for m in msg.markers if m.action == m.ADD),
+                              self._settings)
         self.get_logger().info(f'scene for the next plan: {len(obstacles)} obstacles from '
-                               'collision_objects')
+                               f'collision_objects{frames}')
 
     # --- inputs (executor thread) -----------------------------------------------------------
 

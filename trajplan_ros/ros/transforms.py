@@ -13,7 +13,7 @@ blocks); obstacles do not: they take the newest transform when they arrive.
 from __future__ import annotations
 
 import time
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 from rclpy.duration import Duration
@@ -22,7 +22,7 @@ from rclpy.time import Time
 from trajplan_ros.kinematics.rotations import rotation_matrix, unit_quaternion
 from trajplan_ros.ros.settings import Settings
 
-__all__ = ['HOW_TO', 'Transforms', 'frame_pose', 'frame_problem', 'listen']
+__all__ = ['HOW_TO', 'Transforms', 'arrival_note', 'frame_pose', 'frame_problem', 'listen']
 
 #: How long a goal's wait for its frame goes on before it asks whether to stop, s.
 WAIT_SLICE = 0.1
@@ -127,3 +127,11 @@ def frame_problem(frame: str, settings: Settings, with_tf: bool) -> str | None:
         return None
     return (f"frame '{frame}' is not a link of the robot; known frames: "
             f"{', '.join(settings.frames.links)} (other frames need tf2)")
+
+
+def arrival_note(frames: Iterable[str], settings: Settings) -> str:
+    """Say the frames obstacles came in, posed as they were on arrival ('' for the base only)."""
+    others = sorted({f for f in frames if f and f != settings.base_frame})
+    if not others:
+        return ''
+    return f"; posed as {', '.join(repr(f) for f in others)} stood on arrival, and kept there"
