@@ -176,10 +176,9 @@ def ik_job(label: str, ik: Any, settings: Settings, srdf: str,
     if problem:
         raise Refusal('INVALID_GOAL_CONSTRAINTS', problem)
     # the pose is the link's origin's; the planner places its tool point (tool_offset)
-    point = np.array([p.x, p.y, p.z]) + rotation_matrix(np.asarray(q) / np.linalg.norm(q)) @ (
-        s.arm.tool_point)
-    goal = s.request.goal.replace(position=point, frame=frame, mode=Mode.POSE,
-                                  orientation=np.asarray(q) / np.linalg.norm(q))
+    unit = np.asarray(q) / np.linalg.norm(q)
+    point = np.array([p.x, p.y, p.z]) + rotation_matrix(unit) @ s.arm.tool_point
+    goal = s.request.goal.replace(position=point, frame=frame, mode=Mode.POSE, orientation=unit)
     stamp = ik.pose_stamped.header.stamp
     job = Job(label, goal, future=Future(), plan_only=True, start_state=start,
               answer_path=False, stamp=(stamp.sec, stamp.nanosec))

@@ -55,13 +55,11 @@ class Transforms:
         """
         when = Time(seconds=stamp[0], nanoseconds=stamp[1]) if any(stamp) else Time()
         deadline = time.monotonic() + timeout
-        while not (self.buffer.can_transform(target, frame, when)
-                   or (stop is not None and stop())):
-            left = deadline - time.monotonic()
-            if left <= 0.0:
+        while not (stop is not None and stop()):
+            left = min(deadline - time.monotonic(), WAIT_SLICE)
+            if (self.buffer.can_transform(target, frame, when, Duration(seconds=max(left, 0.0)))
+                    or left <= 0.0):
                 break
-            self.buffer.can_transform(target, frame, when,
-                                      Duration(seconds=min(left, WAIT_SLICE)))
         try:
             found = self.buffer.lookup_transform(target, frame, when)
         except self._tf2.TransformException as exc:
@@ -101,13 +99,12 @@ def frame_pose(frame: str, settings: Settings, angles: Mapping[str, float],
     if not frame or frame == base:
         return np.eye(4)
     in_urdf = frame in settings.frames.links
-    if transforms is not None and not in_urdf:
-        return transforms.pose(base, frame, stamp, wait, stop)
-    if transforms is not None and transforms.knows(base, frame):
+    if transforms is not None and (not in_urdf or transforms.knows(base, frame)):
         try:
             return transforms.pose(base, frame, stamp, wait, stop)
-        except ValueError:                         # not at that stamp: the robot's own FK
-            pass
+        except ValueError:
+            if not in_urdf:
+                raise                              # a URDF link: the robot's own FK instead
     problem = frame_problem(frame, settings, transforms is not None)
     if problem:
         raise ValueError(problem)
