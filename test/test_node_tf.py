@@ -108,13 +108,16 @@ def broadcast(tf2_env: dict[str, str]) -> Iterator:
 
 
 @pytest.fixture(scope='module')
-def planner(start_node, tf2_env: dict[str, str], broadcast) -> Iterator[NodeProcess]:
+def planner(start_node, tf2_env: dict[str, str], broadcast,
+            peer: RosClient) -> Iterator[NodeProcess]:
     """One node with tf2 and the collision check, beside a static camera_link."""
     node = start_node('-r', f'__ns:={NS}', '-p', 'collision_check:=true', '-p',
                       f'transform_timeout:={TIMEOUT}', '-p', 'max_planning_time:=30.0',
                       env=tf2_env)                    # (a busy machine's detours take long)
     assert 'need tf2' not in node.output
     broadcast('static', 'camera_link')
+    wait_until(lambda: bool(call(peer, in_camera(TARGET), 'camera_link').plan.poses),
+               what='the node to know camera_link')     # DDS has matched the /tf_static
     yield node
     assert node.stop() == 0, node.output
 
